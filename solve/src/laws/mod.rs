@@ -1,0 +1,97 @@
+//! Material laws at one point (SPEC §5), each a pure step function:
+//! (parameters, committed state, total strain or jump, tangent kind)
+//! → (stress or traction, trial state, tangent) or an error the solver can
+//! act on (cut the step). History goes in by reference and comes out as a new
+//! value; nothing here knows about elements or global indices.
+//!
+//! Conventions (SI):
+//! * Bulk strains and stresses in Voigt order `[xx, yy, zz, xy, yz, xz]`;
+//!   strain shear components are *engineering* (γ = 2ε), so that
+//!   `σ·ε` is the work density and `B` matrices are the usual ones.
+//! * Interface jump `u = (u_n, u_t, u_h)` in the element's local frame,
+//!   `u_n > 0` opening; traction `(t_n, t_t, t_h)` in Pa.
+
+use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
+
+/// Which tangent the caller wants (MFront's elastic / secant / consistent).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum TangentKind {
+    /// Undamaged elastic stiffness.
+    Elastic,
+    /// Secant stiffness (e.g. (1 − D) C): always positive semi-definite.
+    Secant,
+    /// Consistent (algorithmic) tangent dσ/dε of the step.
+    Consistent,
+}
+
+/// A law could not produce a finite answer for this input; the solver cuts the step.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum LawError {
+    #[error("{law}: non-finite input {what}")]
+    NonFiniteInput { law: &'static str, what: &'static str },
+    #[error("{law}: return mapping did not converge ({detail})")]
+    ReturnMapping { law: &'static str, detail: String },
+    #[error("{law}: non-finite result ({what})")]
+    NonFiniteResult { law: &'static str, what: &'static str },
+}
+
+/// Committed history of one bulk integration point. Each law uses its part.
+#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize, serde::Deserialize)]
+pub struct BulkState {
+    /// Mazars: largest equivalent strain reached, κ.
+    pub kappa: f64,
+    /// Mazars: damage D ∈ [0, 1], never decreasing.
+    pub damage: f64,
+    /// J2: plastic strain (Voigt, engineering shear).
+    pub plastic_strain: [f64; 6],
+}
+
+/// Result of a bulk step.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BulkResponse {
+    pub stress: Vector6<f64>,
+    pub tangent: Matrix6<f64>,
+    pub state: BulkState,
+}
+
+/// Committed history of one interface integration point.
+#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize, serde::Deserialize)]
+pub struct InterfaceState {
+    /// Largest effective jump reached beyond λ_0 (Tvergaard/FCZM λ̃), m.
+    pub lambda_max: f64,
+    /// Interface damage D ∈ [0, 1], never decreasing.
+    pub damage: f64,
+    /// Plastic (frictional) slip in the local tangential plane (t, h), m.
+    pub slip: [f64; 2],
+}
+
+/// Result of an interface step.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct InterfaceResponse {
+    pub traction: Vector3<f64>,
+    pub tangent: Matrix3<f64>,
+    pub state: InterfaceState,
+}
+
+/// A bulk constitutive law.
+pub trait BulkLaw: Sync {
+    fn step(
+        &self,
+        committed: &BulkState,
+        strain: &Vector6<f64>,
+        kind: TangentKind,
+    ) -> Result<BulkResponse, LawError>;
+}
+
+/// An interface constitutive law in the local frame.
+pub trait InterfaceLaw: Sync {
+    fn step(
+        &self,
+        committed: &InterfaceState,
+        jump: &Vector3<f64>,
+        kind: TangentKind,
+    ) -> Result<InterfaceResponse, LawError>;
+    /// The initial (undamaged) stiffness diag(K_n, K_s, K_s), N/m³.
+    fn elastic_stiffness(&self) -> Matrix3<f64>;
+}

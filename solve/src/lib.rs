@@ -1,0 +1,3 @@
+//! Material laws, element kernels, assembly and the nonlinear pull-out solver.
+
+pub mod laws;
