@@ -11,6 +11,8 @@
 //! * Interface jump `u = (u_n, u_t, u_h)` in the element's local frame,
 //!   `u_n > 0` opening; traction `(t_n, t_t, t_h)` in Pa.
 
+pub mod elastic;
+
 use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
 
 /// Which tangent the caller wants (MFront's elastic / secant / consistent).
