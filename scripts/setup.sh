@@ -5,6 +5,8 @@
 # build of the `ribbar` binary. Idempotent: a second run only checks.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+build=1
+[ "${1:-}" = "--no-build" ] && build=0
 
 GMSH_VERSION=4.15.2
 VENV=.tools/gmsh-venv
@@ -12,7 +14,7 @@ VENV=.tools/gmsh-venv
 # gmsh's wheel links against X11/GL/fontconfig even when run without a display.
 need_pkgs=()
 for pkg in libglu1-mesa libgl1 libxrender1 libxcursor1 libxfixes3 libxext6 libxft2 \
-           libfontconfig1 libxinerama1 libx11-6 libgomp1 python3-venv; do
+           libfontconfig1 libxinerama1 libx11-6 libgomp1 fonts-dejavu-core; do
   dpkg-query -W -f='${Status}' "$pkg" 2>/dev/null | grep -q "install ok installed" || need_pkgs+=("$pkg")
 done
 if [ ${#need_pkgs[@]} -gt 0 ]; then
@@ -30,5 +32,7 @@ if ! "$VENV/bin/python" -c "import gmsh, sys; sys.exit(gmsh.__version__ != '$GMS
 fi
 echo "setup: gmsh $("$VENV/bin/python" "$VENV/bin/gmsh" --version 2>&1 | tail -1) at $VENV/bin/gmsh"
 
-cargo build --release --quiet
-echo "setup: built target/release/ribbar"
+if [ "$build" = 1 ]; then
+  cargo build --release --quiet
+  echo "setup: built target/release/ribbar"
+fi

@@ -1,0 +1,103 @@
+//! Command-line surface of `ribbar` (clap derive types only; validation of
+//! what they carry happens where the values are used).
+
+use clap::{Args, Parser, Subcommand, ValueEnum};
+use std::path::PathBuf;
+
+#[derive(Debug, Parser)]
+#[command(
+    name = "ribbar",
+    version,
+    about = "Rib-scale steel–concrete bond: parametric pull-out specimens, gmsh meshing, \
+             interface elements, nonlinear solve, bond stress–slip curves",
+    propagate_version = true
+)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+    /// Print nothing but errors.
+    #[arg(short, long, global = true, conflicts_with = "verbose")]
+    pub quiet: bool,
+    /// Print more detail (per-iteration residuals, timings).
+    #[arg(short, long, global = true)]
+    pub verbose: bool,
+}
+
+/// Options shared by every stage command.
+#[derive(Debug, Args, Clone)]
+pub struct SceneArgs {
+    /// Scene spec (YAML).
+    pub spec: PathBuf,
+    /// Work directory holding the artifact store and `<scene>/` results.
+    #[arg(long, default_value = "ribbar-work")]
+    pub work: PathBuf,
+    /// Override a spec key, e.g. --set bar.ribs.angle="60 deg" (repeatable).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub overrides: Vec<String>,
+}
+
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Build the bar and specimen solid: specimen.geo and geometry.json.
+    Geometry(SceneArgs),
+    /// Mesh with gmsh and build the model with interface elements.
+    Mesh(SceneArgs),
+    /// Solve the pull-out: curve.csv, solve summary, fields.
+    Solve(SceneArgs),
+    /// Plots, summary.json and fields from the solve.
+    Post(SceneArgs),
+    /// Run every stale stage in order.
+    Run(SceneArgs),
+    /// Show for each stage: up to date, stale (and which keys changed), or missing.
+    Status(SceneArgs),
+    /// Remove the scene's results (and, with --all, the whole store).
+    Clean(CleanArgs),
+    /// Drive one material point along a loading path (like MFront's mtest).
+    Material(MaterialArgs),
+    /// Run a study: a base spec with lists of values, or a mesh-convergence series.
+    Study(StudyArgs),
+}
+
+#[derive(Debug, Args)]
+pub struct CleanArgs {
+    /// Scene spec whose results are removed.
+    pub spec: Option<PathBuf>,
+    #[arg(long, default_value = "ribbar-work")]
+    pub work: PathBuf,
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub overrides: Vec<String>,
+    /// Remove the whole work directory's store as well.
+    #[arg(long)]
+    pub all: bool,
+}
+
+#[derive(Debug, Args)]
+pub struct MaterialArgs {
+    /// Material-point test file (YAML).
+    pub test: PathBuf,
+    /// Output CSV (default: standard output).
+    #[arg(short, long)]
+    pub output: Option<PathBuf>,
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum, PartialEq, Eq)]
+pub enum ExportFormat {
+    Snakemake,
+}
+
+#[derive(Debug, Args)]
+pub struct StudyArgs {
+    /// Study file (YAML).
+    pub study: PathBuf,
+    #[arg(long, default_value = "ribbar-work")]
+    pub work: PathBuf,
+    /// Cases run at once.
+    #[arg(long, short = 'j', default_value_t = 1)]
+    pub jobs: usize,
+    /// Memory bound for concurrently running cases, GiB.
+    #[arg(long, default_value_t = 16.0)]
+    pub memory_gib: f64,
+    /// Write a workflow for an external engine instead of running.
+    #[arg(long, value_enum)]
+    pub export: Option<ExportFormat>,
+}
