@@ -11,7 +11,12 @@
 //! * Interface jump `u = (u_n, u_t, u_h)` in the element's local frame,
 //!   `u_n > 0` opening; traction `(t_n, t_t, t_h)` in Pa.
 
+pub mod coulomb;
 pub mod elastic;
+pub mod fczm;
+pub mod j2;
+pub mod mazars;
+pub mod tvergaard;
 
 use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
 
@@ -96,4 +101,77 @@ pub trait InterfaceLaw: Sync {
     ) -> Result<InterfaceResponse, LawError>;
     /// The initial (undamaged) stiffness diag(K_n, K_s, K_s), N/m³.
     fn elastic_stiffness(&self) -> Matrix3<f64>;
+}
+
+/// `Err(NonFiniteInput)` unless every component is finite.
+pub(crate) fn check_finite(law: &'static str, what: &'static str, v: &[f64]) -> Result<(), LawError> {
+    if v.iter().all(|x| x.is_finite()) {
+        Ok(())
+    } else {
+        Err(LawError::NonFiniteInput { law, what })
+    }
+}
+
+/// `Err(NonFiniteResult)` unless every component is finite.
+pub(crate) fn check_result(law: &'static str, what: &'static str, v: &[f64]) -> Result<(), LawError> {
+    if v.iter().all(|x| x.is_finite()) {
+        Ok(())
+    } else {
+        Err(LawError::NonFiniteResult { law, what })
+    }
+}
+
+/// Any interface law of SPEC §5, dispatched at run time (one per interface group).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(tag = "law", rename_all = "snake_case")]
+pub enum AnyInterfaceLaw {
+    Fczm(fczm::Fczm),
+    Tvergaard(tvergaard::Tvergaard),
+    Coulomb(coulomb::Coulomb),
+    Elastic(elastic::ElasticInterface),
+}
+
+impl AnyInterfaceLaw {
+    /// The non-adhesive "contact" option of SPEC §2: no tension, no friction,
+    /// normal stiffness `normal_stiffness` (N/m³) in compression. It is the
+    /// FCZM with D = 1 and μ = 0; the cohesive parameters then play no role
+    /// and are set to harmless values.
+    pub fn contact(normal_stiffness: f64) -> Self {
+        AnyInterfaceLaw::Fczm(fczm::Fczm::contact(normal_stiffness))
+    }
+
+    /// Short name of the law (as written in specs).
+    pub fn name(&self) -> &'static str {
+        match self {
+            AnyInterfaceLaw::Fczm(_) => "fczm",
+            AnyInterfaceLaw::Tvergaard(_) => "tvergaard",
+            AnyInterfaceLaw::Coulomb(_) => "coulomb",
+            AnyInterfaceLaw::Elastic(_) => "elastic",
+        }
+    }
+}
+
+impl InterfaceLaw for AnyInterfaceLaw {
+    fn step(
+        &self,
+        committed: &InterfaceState,
+        jump: &Vector3<f64>,
+        kind: TangentKind,
+    ) -> Result<InterfaceResponse, LawError> {
+        match self {
+            AnyInterfaceLaw::Fczm(l) => l.step(committed, jump, kind),
+            AnyInterfaceLaw::Tvergaard(l) => l.step(committed, jump, kind),
+            AnyInterfaceLaw::Coulomb(l) => l.step(committed, jump, kind),
+            AnyInterfaceLaw::Elastic(l) => l.step(committed, jump, kind),
+        }
+    }
+
+    fn elastic_stiffness(&self) -> Matrix3<f64> {
+        match self {
+            AnyInterfaceLaw::Fczm(l) => l.elastic_stiffness(),
+            AnyInterfaceLaw::Tvergaard(l) => l.elastic_stiffness(),
+            AnyInterfaceLaw::Coulomb(l) => l.elastic_stiffness(),
+            AnyInterfaceLaw::Elastic(l) => l.elastic_stiffness(),
+        }
+    }
 }

@@ -1,0 +1,217 @@
+//! The frictional cohesive zone model (FCZM) of the paper, §3.1, eqs. 15–26.
+//!
+//! A representative interface area splits into a damaged part (fraction D),
+//! in frictional contact, and an undamaged part following a modified
+//! Tvergaard law:
+//!
+//! * σ = D σ^d + (1 − D) σ^u (15).
+//! * Damaged part (16–18): σ_dn = K_n ⟨u_n⟩₋ (no tension), σ_ds = K_s (u_s − u_s^di);
+//!   Coulomb friction |σ_ds| + μ σ_dn ≤ 0 (19) with slip along σ_ds (20),
+//!   Kuhn–Tucker (21): solved by a closed-form radial return.
+//! * Damage (22): D = 1 − exp(−f_t λ̃ / (ζ G_f)), λ̃ as in Tvergaard (A.2–A.4),
+//!   with K_n = f_t/λ_0 (A.7), K_s = K_n/δ_s (A.3).
+//! * Undamaged part (23–24): σ_un = β K_n u_n, σ_us = α K_s u_s, with β (25)
+//!   and α (26): both 1 while D = 0; λ_0/λ when σ_dn ≥ 0 (u_n ≥ 0); when
+//!   σ_dn < 0: β = exp(f_t λ̃/(ζ G_f)) = 1/(1 − D), and α = 1 − D for
+//!   σ_dn ≤ γ, and in between (γ < σ_dn < 0) the linear interpolation in σ_dn
+//!   from λ_0/λ (σ_dn = 0) to 1 − D (σ_dn = γ).
+//!
+//! Readings of the printed equations (SPEC §5): λ in (25)–(26) is the history
+//! value λ̃ + λ_0 (equal to λ while damage grows), so unloading is secant and
+//! nothing divides by zero; the third case of (26) is the interpolation above.
+//! With ζ = 1 and u_n ≥ 0, (1 − D) σ^u is exactly Tvergaard's (A.6–A.11); in
+//! compression (1 − D) σ_un = K_n u_n, so the total normal stress is
+//! (1 + D) K_n u_n (the damaged part adds D K_n u_n): that is what (15)–(25)
+//! say, and it is why the paper's shear-under-compression cases hold u_n at
+//! σ_N/K_n rather than the total normal stress.
+//!
+//! `min_damage` (normally 0) raises D to at least that value: with 1 and μ = 0
+//! it is the no-tension frictionless contact of SPEC §2.
+//!
+//! Tangents: `Elastic` → diag(K_n, K_s, K_s); `Secant` → D·diag(∂σ_dn/∂u_n,
+//! K_s r, K_s r) + (1 − D)·diag(β K_n, α K_s, α K_s), r = 1 sticking,
+//! |σ_ds|/|σ_ds*| sliding (drops all history derivatives: positive
+//! semi-definite); `Consistent` → the exact derivative of the step: return
+//! map, dD/du and dα/du, dβ/du while λ̃ grows, and the dependence of α on σ_dn.
+//! It is not symmetric when sliding or when damage grows.
+//!
+//! Reference: Abbas, Bary, Jason, IJMS 237 (2023) §3.1; G. Alfano, E. Sacco,
+//! IJNME 68 (2006) for the damage/friction decomposition.
+
+use super::coulomb::slip_return;
+use super::tvergaard::opening;
+use super::{
+    check_finite, check_result, InterfaceLaw, InterfaceResponse, InterfaceState, LawError,
+    TangentKind,
+};
+use nalgebra::{Matrix3, Vector2, Vector3};
+use serde::{Deserialize, Serialize};
+
+/// Default γ of eq. (26), Pa.
+pub const DEFAULT_GAMMA: f64 = -1e6;
+
+/// Frictional cohesive zone model.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Fczm {
+    /// Tensile strength f_t, Pa.
+    pub tensile_strength: f64,
+    /// Fracture energy G_f, N/m.
+    pub fracture_energy: f64,
+    /// Damage threshold λ_0, m.
+    pub lambda0: f64,
+    /// Stiffness ratio δ_s = K_n/K_s (dimensionless).
+    pub delta_s: f64,
+    /// Friction coefficient μ (dimensionless).
+    pub friction: f64,
+    /// Damage energy coefficient ζ of eq. (22) (dimensionless, > 0).
+    pub zeta: f64,
+    /// Stress γ of eq. (26), Pa, negative.
+    pub gamma: f64,
+    /// Lower bound of D (dimensionless, [0, 1]); 1 for contact.
+    #[serde(default)]
+    pub min_damage: f64,
+}
+
+impl Fczm {
+    /// The no-tension frictionless contact with normal stiffness `kn` (N/m³).
+    pub fn contact(kn: f64) -> Self {
+        // Only K_n = f_t/λ_0 matters once D = 1 and μ = 0.
+        Fczm {
+            tensile_strength: kn * 1e-5,
+            fracture_energy: 1.0,
+            lambda0: 1e-5,
+            delta_s: 1.0,
+            friction: 0.0,
+            zeta: 1.0,
+            gamma: DEFAULT_GAMMA,
+            min_damage: 1.0,
+        }
+    }
+    /// K_n = f_t/λ_0, N/m³.
+    pub fn normal_stiffness(&self) -> f64 {
+        self.tensile_strength / self.lambda0
+    }
+    /// K_s = K_n/δ_s, N/m³.
+    pub fn shear_stiffness(&self) -> f64 {
+        self.normal_stiffness() / self.delta_s
+    }
+}
+
+impl InterfaceLaw for Fczm {
+    fn step(
+        &self,
+        committed: &InterfaceState,
+        jump: &Vector3<f64>,
+        kind: TangentKind,
+    ) -> Result<InterfaceResponse, LawError> {
+        const LAW: &str = "fczm";
+        check_finite(LAW, "jump", jump.as_slice())?;
+        let (kn, ks) = (self.normal_stiffness(), self.shear_stiffness());
+        let c = self.tensile_strength / (self.zeta * self.fracture_energy);
+        let un = jump[0];
+        let us = Vector2::new(jump[1], jump[2]);
+
+        // Damage indicator and damage (A.2–A.4, 22).
+        let (lam, dlam) = opening(jump, self.delta_s);
+        let loading = lam - self.lambda0 > committed.lambda_max;
+        let lt = if loading { lam - self.lambda0 } else { committed.lambda_max.max(0.0) };
+        let big = lt + self.lambda0;
+        let dbig = if loading { dlam } else { Vector3::zeros() };
+        let q_nat = (-c * lt).exp();
+        let floor_q = 1.0 - self.min_damage;
+        let floored = floor_q <= q_nat;
+        let q = if floored { floor_q } else { q_nat };
+        let d = 1.0 - q;
+        let dq = if floored { Vector3::zeros() } else { dbig * (-c * q) };
+        let dd = -dq;
+        let r = self.lambda0 / big;
+        let dr = dbig * (-self.lambda0 / (big * big));
+
+        // Damaged part: no tension, Coulomb friction (16–21).
+        let sdn = kn * un.min(0.0);
+        let dsdn = if un < 0.0 { kn } else { 0.0 };
+        let ret = slip_return(
+            us,
+            Vector2::new(committed.slip[0], committed.slip[1]),
+            ks,
+            -self.friction * sdn,
+        );
+
+        // Undamaged part weights P = (1 − D)β, (1 − D)α and their gradients (23–26).
+        let e_n = Vector3::new(1.0, 0.0, 0.0);
+        let (pn, dpn, ps, dps);
+        if q >= 1.0 {
+            (pn, dpn, ps, dps) = (1.0, Vector3::zeros(), 1.0, Vector3::zeros());
+        } else if un >= 0.0 {
+            let p = q * r;
+            let dp = dq * r + dr * q;
+            (pn, dpn, ps, dps) = (p, dp, p, dp);
+        } else {
+            // (1 − D)/(1 − D(λ̃)) in logarithms: no overflow of exp(c λ̃).
+            if floored {
+                pn = (floor_q.ln() + c * lt).exp();
+                dpn = dbig * (c * pn);
+            } else {
+                pn = 1.0;
+                dpn = Vector3::zeros();
+            }
+            if sdn <= self.gamma {
+                ps = q * q;
+                dps = dq * (2.0 * q);
+            } else {
+                let s = sdn / self.gamma;
+                let ds = e_n * (dsdn / self.gamma);
+                let a = r * (1.0 - s) + s * q;
+                let da = dr * (1.0 - s) - ds * r + ds * q + dq * s;
+                ps = q * a;
+                dps = dq * a + da * q;
+            }
+        }
+
+        let traction = Vector3::new(
+            d * sdn + pn * kn * un,
+            d * ret.tau[0] + ps * ks * us[0],
+            d * ret.tau[1] + ps * ks * us[1],
+        );
+        let tangent = match kind {
+            TangentKind::Elastic => self.elastic_stiffness(),
+            TangentKind::Secant => Matrix3::from_diagonal(&Vector3::new(
+                d * dsdn + pn * kn,
+                d * ks * ret.ratio + ps * ks,
+                d * ks * ret.ratio + ps * ks,
+            )),
+            TangentKind::Consistent => {
+                let mut t = Matrix3::zeros();
+                // Normal row.
+                let row_n = e_n * (d * dsdn + pn * kn) + dd * sdn + dpn * (kn * un);
+                t.set_row(0, &row_n.transpose());
+                // Tangential rows.
+                let dty_dun = -self.friction * dsdn;
+                for i in 0..2 {
+                    let mut row = dd * ret.tau[i] + dps * (ks * us[i]);
+                    row[0] += d * ret.d_tau_d_ty[i] * dty_dun;
+                    row[1] += d * ret.d_tau_d_us[(i, 0)];
+                    row[2] += d * ret.d_tau_d_us[(i, 1)];
+                    row[i + 1] += ps * ks;
+                    t.set_row(i + 1, &row.transpose());
+                }
+                t
+            }
+        };
+        check_result(LAW, "traction", traction.as_slice())?;
+        check_result(LAW, "tangent", tangent.as_slice())?;
+        Ok(InterfaceResponse {
+            traction,
+            tangent,
+            state: InterfaceState {
+                lambda_max: lt,
+                damage: d.max(committed.damage),
+                slip: [ret.slip[0], ret.slip[1]],
+            },
+        })
+    }
+
+    fn elastic_stiffness(&self) -> Matrix3<f64> {
+        Matrix3::from_diagonal(&Vector3::new(self.normal_stiffness(), self.shear_stiffness(), self.shear_stiffness()))
+    }
+}

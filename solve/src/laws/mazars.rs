@@ -1,0 +1,339 @@
+//! Mazars' scalar damage model for concrete (paper §2.3, eqs. 1–13), with
+//! Hillerborg regularisation in tension and size-dependent compression
+//! parameters.
+//!
+//! * Stress: σ = (1 − D) C : ε (eq. 1), C isotropic (E, ν).
+//! * Equivalent strain: ε_eq = √(Σ ⟨ε_i⟩₊²) over the principal strains (eq. 3);
+//!   history κ = max(ε_D0, max over time of ε_eq).
+//! * Damage: D = α_t^β D_t(κ) + α_c^β D_c(κ) (eq. 4), α_c = 1 − α_t, with
+//!   α_t = Σ ⟨ε_ti⟩₊ ⟨ε_i⟩₊ / ε_eq² (eq. 6) and ε_t the strain of the positive
+//!   part of the *effective* stress C:ε (eqs. 7–8), clipped to [0, 1].
+//! * D_c (and D_t in the classic form) from eq. (5):
+//!   D = 1 − ε_D0 (1 − A)/κ − A exp(−B (κ − ε_D0)).
+//! * Regularised tension (eq. 9): D_t = 1 − (ε_D0/κ) exp(B_t (ε_D0 − κ)), with
+//!   B_t = l E ε_D0 / (G_f − l E ε_D0²/2), the intended form of the misprinted
+//!   eq. (10): it makes the energy per unit crack area l ∫σ dε equal G_f.
+//! * Compression from the element size (eqs. 12–13, l in metres), with the
+//!   sign of the l² term of eq. (12) corrected (SPEC §5):
+//!   A_c = 335.9133 l² + 16.2746 l − 0.0002, B_c = 140984.5429 l² + 29701.4423 l − 0.0996.
+//! * Damage never decreases: D = max(D_committed, D(κ, α_t)).
+//!
+//! Tangents: `Elastic` → C; `Secant` → (1 − D) C; `Consistent` → (1 − D) C
+//! when D does not grow in the step (elastic, unloading, reloading below κ),
+//! and (1 − D) C − (C:ε) ⊗ ∂D/∂ε when it grows, where ∂D/∂ε contains the
+//! exact derivative through κ = ε_eq and the derivative through α_t, the
+//! latter evaluated by central differences of the closed-form α_t (it is a
+//! piecewise-smooth function of the principal values).
+//!
+//! State: `BulkState::kappa` (largest ε_eq reached) and `BulkState::damage`.
+//!
+//! Reference: J. Mazars, "A description of micro- and macroscale damage of
+//! concrete structures", Eng. Fract. Mech. 25 (1986); Abbas, Bary, Jason,
+//! IJMS 237 (2023), §2.3.
+
+use super::elastic::isotropic_stiffness;
+use super::{check_finite, check_result, BulkLaw, BulkResponse, BulkState, LawError, TangentKind};
+use nalgebra::{Matrix3, Matrix6, SymmetricEigen, Vector3, Vector6};
+use serde::{Deserialize, Serialize};
+
+/// Default initial damage threshold ε_D0 (paper §2.3).
+pub const DEFAULT_EPS_D0: f64 = 1e-4;
+/// Default shear correction exponent β (paper §2.3).
+pub const DEFAULT_SHEAR_EXPONENT: f64 = 1.06;
+
+/// How tension softening is given.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum TensionSoftening {
+    /// Hillerborg-regularised exponential softening (eq. 9), B_t from the
+    /// fracture energy `fracture_energy` (G_f, N/m) and the element size.
+    Regularised { fracture_energy: f64 },
+    /// Classical eq. (5) with fixed A_t (dimensionless) and B_t (dimensionless,
+    /// multiplies a strain); mesh dependent.
+    Classic { a_t: f64, b_t: f64 },
+}
+
+/// How compression softening is given.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum CompressionSoftening {
+    /// A_c, B_c from the element size by eqs. (12)–(13) (SPEC §5 reading).
+    SizeFit,
+    /// Fixed A_c, B_c (dimensionless) in eq. (5).
+    Classic { a_c: f64, b_c: f64 },
+}
+
+/// Mazars concrete as a material (size independent); [`MazarsMaterial::at_size`]
+/// gives the law of an element of characteristic size l.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct MazarsMaterial {
+    /// Young's modulus E, Pa.
+    pub young_modulus: f64,
+    /// Poisson's ratio ν (dimensionless).
+    pub poisson_ratio: f64,
+    /// Initial damage threshold ε_D0 (dimensionless strain); f_t = E ε_D0.
+    pub eps_d0: f64,
+    /// Shear correction exponent β of eq. (4) (dimensionless).
+    pub shear_exponent: f64,
+    pub tension: TensionSoftening,
+    pub compression: CompressionSoftening,
+}
+
+/// Why no law exists for an element of the given size.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum MazarsSizeError {
+    #[error("Mazars: element size l = {l} m must be positive and finite")]
+    BadSize { l: f64 },
+    #[error(
+        "Mazars: element size l = {l} m is too large for the regularised tension: \
+         G_f = {fracture_energy} N/m must exceed l E ε_D0²/2 = {elastic_energy} N/m \
+         (snap-back), so l must be below {l_max} m; refine the mesh"
+    )]
+    TooLarge { l: f64, fracture_energy: f64, elastic_energy: f64, l_max: f64 },
+    #[error(
+        "Mazars: element size l = {l} m gives A_c = {a_c}, B_c = {b_c} by eqs. (12)-(13), \
+         outside their range (A_c >= 0, B_c > 0 needed); give A_c and B_c explicitly"
+    )]
+    OutsideFit { l: f64, a_c: f64, b_c: f64 },
+}
+
+/// A_c and B_c of eqs. (12)–(13) for an element size `l` in metres (SPEC §5 sign reading).
+pub fn compression_fit(l: f64) -> (f64, f64) {
+    let a_c = 335.9133 * l * l + 16.2746 * l - 0.0002;
+    let b_c = 140984.5429 * l * l + 29701.4423 * l - 0.0996;
+    (a_c, b_c)
+}
+
+impl MazarsMaterial {
+    /// Tensile strength f_t = E ε_D0, Pa.
+    pub fn tensile_strength(&self) -> f64 {
+        self.young_modulus * self.eps_d0
+    }
+
+    /// The law of an element of characteristic size `l` (m, eq. 11).
+    pub fn at_size(&self, l: f64) -> Result<Mazars, MazarsSizeError> {
+        if !(l.is_finite() && l > 0.0) {
+            return Err(MazarsSizeError::BadSize { l });
+        }
+        let (e, e0) = (self.young_modulus, self.eps_d0);
+        let tension = match self.tension {
+            TensionSoftening::Regularised { fracture_energy } => {
+                let elastic_energy = l * e * e0 * e0 / 2.0;
+                let denom = fracture_energy - elastic_energy;
+                if denom <= 0.0 {
+                    return Err(MazarsSizeError::TooLarge {
+                        l,
+                        fracture_energy,
+                        elastic_energy,
+                        l_max: 2.0 * fracture_energy / (e * e0 * e0),
+                    });
+                }
+                TensionBranch::Exponential { b_t: l * e * e0 / denom }
+            }
+            TensionSoftening::Classic { a_t, b_t } => TensionBranch::Classic { a_t, b_t },
+        };
+        let (a_c, b_c) = match self.compression {
+            CompressionSoftening::SizeFit => {
+                let (a_c, b_c) = compression_fit(l);
+                if !(a_c >= 0.0 && b_c > 0.0) {
+                    return Err(MazarsSizeError::OutsideFit { l, a_c, b_c });
+                }
+                (a_c, b_c)
+            }
+            CompressionSoftening::Classic { a_c, b_c } => (a_c, b_c),
+        };
+        Ok(Mazars {
+            young_modulus: e,
+            poisson_ratio: self.poisson_ratio,
+            eps_d0: e0,
+            shear_exponent: self.shear_exponent,
+            tension,
+            a_c,
+            b_c,
+        })
+    }
+}
+
+/// Tension branch of one element's law.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum TensionBranch {
+    /// Eq. (9) with B_t (dimensionless).
+    Exponential { b_t: f64 },
+    /// Eq. (5) with A_t, B_t (dimensionless).
+    Classic { a_t: f64, b_t: f64 },
+}
+
+/// Mazars law of one element (all parameters fixed).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Mazars {
+    /// Young's modulus E, Pa.
+    pub young_modulus: f64,
+    /// Poisson's ratio ν.
+    pub poisson_ratio: f64,
+    /// Initial damage threshold ε_D0.
+    pub eps_d0: f64,
+    /// Shear correction exponent β.
+    pub shear_exponent: f64,
+    pub tension: TensionBranch,
+    /// A_c of eq. (5), dimensionless.
+    pub a_c: f64,
+    /// B_c of eq. (5), dimensionless.
+    pub b_c: f64,
+}
+
+/// Eq. (5): damage and its derivative in κ.
+fn classic(e0: f64, a: f64, b: f64, kappa: f64) -> (f64, f64) {
+    let ex = (-b * (kappa - e0)).exp();
+    (1.0 - e0 * (1.0 - a) / kappa - a * ex, e0 * (1.0 - a) / (kappa * kappa) + a * b * ex)
+}
+
+fn voigt_to_tensor(e: &Vector6<f64>) -> Matrix3<f64> {
+    Matrix3::new(
+        e[0],
+        e[3] / 2.0,
+        e[5] / 2.0,
+        e[3] / 2.0,
+        e[1],
+        e[4] / 2.0,
+        e[5] / 2.0,
+        e[4] / 2.0,
+        e[2],
+    )
+}
+
+impl Mazars {
+    pub fn stiffness(&self) -> Matrix6<f64> {
+        isotropic_stiffness(self.young_modulus, self.poisson_ratio)
+    }
+
+    /// Tension damage D_t(κ) and dD_t/dκ.
+    fn tension_damage(&self, kappa: f64) -> (f64, f64) {
+        let e0 = self.eps_d0;
+        match self.tension {
+            TensionBranch::Exponential { b_t } => {
+                let g = (e0 / kappa) * (b_t * (e0 - kappa)).exp();
+                (1.0 - g, g * (1.0 / kappa + b_t))
+            }
+            TensionBranch::Classic { a_t, b_t } => classic(e0, a_t, b_t, kappa),
+        }
+    }
+
+    /// α_t of eq. (6) from principal strains (effective stress, eq. 7).
+    fn alpha_t(&self, principal: &Vector3<f64>) -> f64 {
+        let (e, nu) = (self.young_modulus, self.poisson_ratio);
+        let lam = e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu));
+        let mu = e / (2.0 * (1.0 + nu));
+        let tr = principal.sum();
+        let s_pos = principal.map(|ei| (lam * tr + 2.0 * mu * ei).max(0.0));
+        let tr_pos = s_pos.sum();
+        let eq2: f64 = principal.iter().map(|v| v.max(0.0).powi(2)).sum();
+        if eq2 <= 0.0 {
+            return 0.0;
+        }
+        let mut a = 0.0;
+        for i in 0..3 {
+            let eti = ((1.0 + nu) * s_pos[i] - nu * tr_pos) / e;
+            a += eti.max(0.0) * principal[i].max(0.0);
+        }
+        (a / eq2).clamp(0.0, 1.0)
+    }
+
+    fn alpha_t_of_voigt(&self, strain: &Vector6<f64>) -> f64 {
+        let eig = SymmetricEigen::new(voigt_to_tensor(strain));
+        self.alpha_t(&eig.eigenvalues)
+    }
+
+    /// D(κ, α_t) before the max with the committed damage, and the partial
+    /// derivatives (∂D/∂κ, ∂D/∂α_t).
+    fn damage(&self, kappa: f64, alpha_t: f64) -> (f64, f64, f64) {
+        if kappa <= self.eps_d0 {
+            return (0.0, 0.0, 0.0);
+        }
+        let (dt, ddt) = self.tension_damage(kappa);
+        let (dc, ddc) = classic(self.eps_d0, self.a_c, self.b_c, kappa);
+        let b = self.shear_exponent;
+        let ac = 1.0 - alpha_t;
+        let wt = alpha_t.powf(b);
+        let wc = ac.powf(b);
+        let d = wt * dt + wc * dc;
+        let dwt = if alpha_t > 0.0 { b * alpha_t.powf(b - 1.0) } else { 0.0 };
+        let dwc = if ac > 0.0 { b * ac.powf(b - 1.0) } else { 0.0 };
+        (d, wt * ddt + wc * ddc, dwt * dt - dwc * dc)
+    }
+}
+
+impl BulkLaw for Mazars {
+    fn step(
+        &self,
+        committed: &BulkState,
+        strain: &Vector6<f64>,
+        kind: TangentKind,
+    ) -> Result<BulkResponse, LawError> {
+        const LAW: &str = "mazars";
+        check_finite(LAW, "strain", strain.as_slice())?;
+        let c = self.stiffness();
+        let eig = SymmetricEigen::new(voigt_to_tensor(strain));
+        let principal = eig.eigenvalues;
+        let eps_eq = principal.iter().map(|v| v.max(0.0).powi(2)).sum::<f64>().sqrt();
+        let kappa_c = committed.kappa.max(self.eps_d0);
+        let loading = eps_eq > kappa_c;
+        let kappa = kappa_c.max(eps_eq);
+        let alpha_t = self.alpha_t(&principal);
+        let (d_trial, dd_dkappa, dd_dalpha) = self.damage(kappa, alpha_t);
+        let d_trial = d_trial.clamp(0.0, 1.0);
+        let grows = d_trial > committed.damage;
+        let d = if grows { d_trial } else { committed.damage };
+        let effective = c * strain;
+        let stress = effective * (1.0 - d);
+        let tangent = match kind {
+            TangentKind::Elastic => c,
+            TangentKind::Secant => c * (1.0 - d),
+            TangentKind::Consistent => {
+                let mut t = c * (1.0 - d);
+                if grows && d_trial < 1.0 {
+                    let mut grad = Vector6::zeros();
+                    if loading {
+                        // dε_eq/dε = ⟨ε⟩₊/ε_eq, in Voigt with engineering shear.
+                        let mut pos = Matrix3::zeros();
+                        for i in 0..3 {
+                            let n = eig.eigenvectors.column(i);
+                            pos += n * n.transpose() * principal[i].max(0.0);
+                        }
+                        let m = pos / eps_eq;
+                        let dk = Vector6::new(
+                            m[(0, 0)],
+                            m[(1, 1)],
+                            m[(2, 2)],
+                            m[(0, 1)],
+                            m[(1, 2)],
+                            m[(0, 2)],
+                        );
+                        grad += dk * dd_dkappa;
+                    }
+                    if dd_dalpha != 0.0 {
+                        let h = 1e-7 * strain.amax().max(self.eps_d0);
+                        for k in 0..6 {
+                            let mut p = *strain;
+                            let mut q = *strain;
+                            p[k] += h;
+                            q[k] -= h;
+                            let da =
+                                (self.alpha_t_of_voigt(&p) - self.alpha_t_of_voigt(&q)) / (2.0 * h);
+                            grad[k] += dd_dalpha * da;
+                        }
+                    }
+                    t -= effective * grad.transpose();
+                }
+                t
+            }
+        };
+        check_result(LAW, "stress", stress.as_slice())?;
+        check_result(LAW, "tangent", tangent.as_slice())?;
+        Ok(BulkResponse {
+            stress,
+            tangent,
+            state: BulkState { kappa, damage: d, ..*committed },
+        })
+    }
+}
