@@ -75,3 +75,72 @@ pub struct Model {
     /// Adhesive (bonded) length l_adh, m.
     pub adhesive_length: f64,
 }
+
+/// First bytes of a model file: names the format and its version, so a
+/// stale or foreign file is rejected instead of misread.
+const MODEL_MAGIC: &[u8; 16] = b"ribbar-model-v1\n";
+
+impl Model {
+    /// Writes the model (bincode after a magic header) atomically: a
+    /// temporary file in the same directory renamed over `path`.
+    pub fn save(&self, path: &std::path::Path) -> Result<(), crate::MeshError> {
+        let mut bytes = MODEL_MAGIC.to_vec();
+        bincode::serialize_into(&mut bytes, self).map_err(|e| crate::MeshError::ModelFile {
+            path: path.to_path_buf(),
+            detail: e.to_string(),
+        })?;
+        crate::write_atomic(path, &bytes)
+    }
+
+    /// Reads a model written by [`Model::save`].
+    pub fn load(path: &std::path::Path) -> Result<Model, crate::MeshError> {
+        let bytes = std::fs::read(path).map_err(|e| crate::MeshError::io(path, e))?;
+        let bad = |detail: String| crate::MeshError::ModelFile {
+            path: path.to_path_buf(),
+            detail,
+        };
+        let body = bytes
+            .strip_prefix(MODEL_MAGIC.as_slice())
+            .ok_or_else(|| bad("not a ribbar model file (or an older format)".into()))?;
+        let model: Model = bincode::DefaultOptions::new()
+            .with_fixint_encoding()
+            .allow_trailing_bytes()
+            .with_limit(body.len() as u64 * 2 + 1024)
+            .deserialize(body)
+            .map_err(|e| bad(format!("corrupt or truncated: {e}")))?;
+        model.check().map_err(bad)?;
+        Ok(model)
+    }
+
+    /// Checks that every array has a consistent length and every node id exists.
+    pub fn check(&self) -> Result<(), String> {
+        let n = self.nodes.len();
+        if self.node_region.len() != n {
+            return Err(format!("{} node regions for {} nodes", self.node_region.len(), n));
+        }
+        let m = self.tets.len();
+        if self.tet_region.len() != m || self.tet_size.len() != m {
+            return Err(format!("tet arrays of different lengths ({m} tets)"));
+        }
+        let ok = |i: &u32| (*i as usize) < n;
+        if !self.tets.iter().all(|t| t.iter().all(ok))
+            || !self.interfaces.iter().all(|e| e.nodes.iter().all(ok))
+        {
+            return Err(format!("an element references a node id ≥ {n}"));
+        }
+        let s = &self.node_sets;
+        for (name, v) in [
+            ("bar_loaded_end", &s.bar_loaded_end),
+            ("bar_free_end", &s.bar_free_end),
+            ("concrete_bearing_face", &s.concrete_bearing_face),
+            ("concrete_free_face", &s.concrete_free_face),
+        ] {
+            if !v.iter().all(ok) {
+                return Err(format!("node set {name} references a node id ≥ {n}"));
+            }
+        }
+        Ok(())
+    }
+}
+
+use bincode::Options as _;

@@ -1,0 +1,80 @@
+//! Typed errors of the mesh stage: each names the file, group, key or
+//! element concerned, so the caller can tell the user what to fix.
+
+use std::path::PathBuf;
+
+/// Everything that can go wrong between the `mesh` spec section and a
+/// written model.
+#[derive(Debug, thiserror::Error)]
+pub enum MeshError {
+    /// A key of the `mesh` spec section is invalid.
+    #[error("mesh.{key}: {message}")]
+    Spec { key: String, message: String },
+    /// A quantity of the `mesh` spec section has a bad unit or number.
+    #[error(transparent)]
+    Unit(#[from] geom::units::UnitError),
+    /// No usable gmsh executable.
+    #[error("gmsh not found: {detail}")]
+    GmshNotFound { detail: String },
+    /// gmsh could not be started.
+    #[error("cannot start gmsh {program}: {source}")]
+    GmshLaunch {
+        program: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    /// gmsh ran and failed; `output` holds the end of its messages.
+    #[error("gmsh failed on {geo} ({status}); gmsh said:\n{output}")]
+    GmshFailed {
+        geo: PathBuf,
+        status: String,
+        output: String,
+    },
+    /// gmsh did not finish in time and was killed.
+    #[error("gmsh did not finish meshing {geo} within {seconds} s (mesh.timeout); last messages:\n{output}")]
+    GmshTimeout {
+        geo: PathBuf,
+        seconds: f64,
+        output: String,
+    },
+    /// A file could not be read or written.
+    #[error("{path}: {source}")]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    /// The `.msh` file is truncated or not a valid gmsh 4.1 file.
+    #[error("{path}: corrupt or truncated .msh file: {detail}")]
+    MshCorrupt { path: PathBuf, detail: String },
+    /// An element references a node tag that the `$Nodes` section does not define.
+    #[error("{path}: element {element} of {group} references node tag {tag}, which the $Nodes section does not define")]
+    BadNodeRef {
+        path: PathBuf,
+        group: String,
+        element: u64,
+        tag: u64,
+    },
+    /// A physical group the model needs is absent (or has no element of the needed type).
+    #[error("{path}: physical group \"{group}\" is missing (expected {what})")]
+    MissingGroup {
+        path: PathBuf,
+        group: String,
+        what: String,
+    },
+    /// The mesh is not the conforming steel/concrete mesh the model needs.
+    #[error("{path}: {detail}")]
+    Topology { path: PathBuf, detail: String },
+    /// A model file could not be encoded or decoded.
+    #[error("{path}: model file: {detail}")]
+    ModelFile { path: PathBuf, detail: String },
+}
+
+impl MeshError {
+    pub(crate) fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
+        MeshError::Io {
+            path: path.into(),
+            source,
+        }
+    }
+}

@@ -1,0 +1,218 @@
+//! The `mesh` section of a scene spec: parsed raw ([`RawMeshSpec`]), then
+//! resolved to SI with defaults and bounds ([`MeshSpec`]).
+//!
+//! ```
+//! let raw: mesh::spec::RawMeshSpec =
+//!     serde_yaml::from_str("h_interface: 0.8 mm\nalgorithm_3d: delaunay").unwrap();
+//! let spec = raw.resolve().unwrap();
+//! assert!((spec.h_interface - 0.8e-3).abs() < 1e-15);
+//! assert!((spec.h_outer - 5e-3).abs() < 1e-15);
+//! ```
+
+use crate::MeshError;
+use geom::units::{Dim, RawQuantity};
+use serde::{Deserialize, Serialize};
+
+/// Default interface mesh size (paper §3.3): 0.4 mm.
+pub const DEFAULT_H_INTERFACE: f64 = 0.4e-3;
+/// Default mesh size at the cube's outer faces (paper §3.3): 5 mm.
+pub const DEFAULT_H_OUTER: f64 = 5e-3;
+/// Default wall-clock limit for one gmsh run: 600 s.
+pub const DEFAULT_TIMEOUT: f64 = 600.0;
+
+/// gmsh's 3D meshing algorithm (`Mesh.Algorithm3D`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Algorithm3d {
+    /// Delaunay (`Mesh.Algorithm3D = 1`): robust; faster on coarse meshes.
+    Delaunay,
+    /// Frontal (`Mesh.Algorithm3D = 4`).
+    Frontal,
+    /// MMG3D (`Mesh.Algorithm3D = 7`).
+    Mmg3d,
+    /// HXT (`Mesh.Algorithm3D = 10`): ~10× faster than Delaunay at
+    /// h_interface = 0.4 mm; output depends on the thread count.
+    Hxt,
+}
+
+impl Algorithm3d {
+    /// The value of gmsh's `Mesh.Algorithm3D` option.
+    pub fn gmsh_id(self) -> u32 {
+        match self {
+            Algorithm3d::Delaunay => 1,
+            Algorithm3d::Frontal => 4,
+            Algorithm3d::Mmg3d => 7,
+            Algorithm3d::Hxt => 10,
+        }
+    }
+}
+
+/// Mesh optimisation after 3D meshing.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Optimize {
+    /// No optimisation (`Mesh.Optimize = 0`): thousands of poor tets remain.
+    None,
+    /// gmsh's tet optimiser (`Mesh.Optimize = 1`).
+    Gmsh,
+    /// gmsh's then Netgen's optimiser (`Mesh.OptimizeNetgen = 1`; not in gmsh 4.8).
+    Netgen,
+}
+
+/// `optimize` accepts `true`/`false` or a named optimiser.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum RawOptimize {
+    Flag(bool),
+    Named(Optimize),
+}
+
+/// The `mesh` section as written in the spec (all keys optional).
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawMeshSpec {
+    /// Mesh size at the steel/concrete interface (length; default 0.4 mm).
+    pub h_interface: Option<RawQuantity>,
+    /// Mesh size at the cube's outer faces (length; default 5 mm).
+    pub h_outer: Option<RawQuantity>,
+    /// gmsh 3D algorithm: delaunay | frontal | mmg3d | hxt (default hxt).
+    pub algorithm_3d: Option<Algorithm3d>,
+    /// true | false | gmsh | netgen | none (default true = gmsh).
+    pub optimize: Option<RawOptimize>,
+    /// gmsh threads (default 1: HXT's mesh changes with the thread count).
+    pub threads: Option<u32>,
+    /// Wall-clock limit for gmsh (time; default 600 s).
+    pub timeout: Option<RawQuantity>,
+}
+
+/// The resolved `mesh` section, SI units.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct MeshSpec {
+    /// Mesh size at the interface, m.
+    pub h_interface: f64,
+    /// Mesh size at the cube's outer faces, m.
+    pub h_outer: f64,
+    pub algorithm_3d: Algorithm3d,
+    pub optimize: Optimize,
+    /// Number of gmsh threads (≥ 1).
+    pub threads: u32,
+    /// Wall-clock limit for gmsh, s.
+    pub timeout: f64,
+}
+
+impl Default for MeshSpec {
+    fn default() -> Self {
+        MeshSpec {
+            h_interface: DEFAULT_H_INTERFACE,
+            h_outer: DEFAULT_H_OUTER,
+            algorithm_3d: Algorithm3d::Hxt,
+            optimize: Optimize::Gmsh,
+            threads: 1,
+            timeout: DEFAULT_TIMEOUT,
+        }
+    }
+}
+
+fn bad(key: &str, message: String) -> MeshError {
+    MeshError::Spec {
+        key: key.to_string(),
+        message,
+    }
+}
+
+impl RawMeshSpec {
+    /// Resolves units, fills defaults and checks bounds; errors name the key.
+    pub fn resolve(&self) -> Result<MeshSpec, MeshError> {
+        let d = MeshSpec::default();
+        let h_interface = match &self.h_interface {
+            Some(q) => q.to_si(Dim::Length, "mesh.h_interface")?,
+            None => d.h_interface,
+        };
+        let h_outer = match &self.h_outer {
+            Some(q) => q.to_si(Dim::Length, "mesh.h_outer")?,
+            None => d.h_outer,
+        };
+        let timeout = match &self.timeout {
+            Some(q) => q.to_si(Dim::Time, "mesh.timeout")?,
+            None => d.timeout,
+        };
+        if h_interface <= 0.0 {
+            return Err(bad("h_interface", format!("must be > 0 m, got {h_interface} m")));
+        }
+        if h_outer <= 0.0 {
+            return Err(bad("h_outer", format!("must be > 0 m, got {h_outer} m")));
+        }
+        if h_outer < h_interface {
+            return Err(bad(
+                "h_outer",
+                format!("must be ≥ h_interface ({h_interface} m), got {h_outer} m"),
+            ));
+        }
+        if timeout <= 0.0 {
+            return Err(bad("timeout", format!("must be > 0 s, got {timeout} s")));
+        }
+        let threads = self.threads.unwrap_or(d.threads);
+        if threads == 0 {
+            return Err(bad("threads", "must be ≥ 1".to_string()));
+        }
+        let optimize = match &self.optimize {
+            None => d.optimize,
+            Some(RawOptimize::Flag(true)) => Optimize::Gmsh,
+            Some(RawOptimize::Flag(false)) => Optimize::None,
+            Some(RawOptimize::Named(o)) => *o,
+        };
+        Ok(MeshSpec {
+            h_interface,
+            h_outer,
+            algorithm_3d: self.algorithm_3d.unwrap_or(d.algorithm_3d),
+            optimize,
+            threads,
+            timeout,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Defaults are the paper's sizes (§3.3: 0.4 mm / 5 mm) and a documented gmsh set-up.
+    #[test]
+    fn defaults() {
+        let spec = RawMeshSpec::default().resolve().unwrap();
+        assert_eq!(spec, MeshSpec::default());
+        assert_eq!(spec.h_interface, 0.4e-3);
+        assert_eq!(spec.h_outer, 5e-3);
+    }
+
+    /// Unknown keys and out-of-range values are errors naming the key (SPEC §8).
+    #[test]
+    fn bad_keys_are_named() {
+        let e = serde_yaml::from_str::<RawMeshSpec>("h_inter: 1 mm").unwrap_err();
+        assert!(e.to_string().contains("h_inter"), "{e}");
+        let raw: RawMeshSpec = serde_yaml::from_str("h_interface: -1 mm").unwrap();
+        let e = raw.resolve().unwrap_err().to_string();
+        assert!(e.contains("mesh.h_interface"), "{e}");
+        let raw: RawMeshSpec = serde_yaml::from_str("h_outer: 3 GPa").unwrap();
+        let e = raw.resolve().unwrap_err().to_string();
+        assert!(e.contains("mesh.h_outer"), "{e}");
+        let raw: RawMeshSpec = serde_yaml::from_str("h_interface: 2 mm\nh_outer: 1 mm").unwrap();
+        assert!(raw.resolve().unwrap_err().to_string().contains("mesh.h_outer"));
+        let raw: RawMeshSpec = serde_yaml::from_str("threads: 0").unwrap();
+        assert!(raw.resolve().unwrap_err().to_string().contains("mesh.threads"));
+        assert!(serde_yaml::from_str::<RawMeshSpec>("algorithm_3d: fast").is_err());
+    }
+
+    /// `optimize` accepts booleans and names; `timeout` takes time units.
+    #[test]
+    fn optimize_and_timeout() {
+        let raw: RawMeshSpec =
+            serde_yaml::from_str("optimize: false\ntimeout: 2 min\nalgorithm_3d: delaunay").unwrap();
+        let s = raw.resolve().unwrap();
+        assert_eq!(s.optimize, Optimize::None);
+        assert_eq!(s.timeout, 120.0);
+        assert_eq!(s.algorithm_3d, Algorithm3d::Delaunay);
+        let raw: RawMeshSpec = serde_yaml::from_str("optimize: netgen").unwrap();
+        assert_eq!(raw.resolve().unwrap().optimize, Optimize::Netgen);
+    }
+}
