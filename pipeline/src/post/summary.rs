@@ -1,0 +1,216 @@
+//! Scalar quantities of interest of one σ_mb–FED curve.
+//!
+//! The curve is read as the polyline through the unloaded state
+//! (FED = 0, σ_mb = 0) followed by the converged steps in file order, i.e. a
+//! piecewise-linear σ_mb(FED). All integrals are exact for that polyline
+//! (trapezoidal rule), and follow the path in step order, so a step where
+//! the free end moves back contributes with its sign.
+
+use super::{Cell, CurveRow, PostError};
+use serde::Serialize;
+
+/// How the curve summary is computed.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SummaryOptions {
+    /// FED up to which the energy under the curve is integrated, m
+    /// (`None`: up to the last step's FED).
+    pub energy_fed_limit: Option<f64>,
+    /// Fraction f ∈ (0, 1] of the final FED over which the residual σ_mb is
+    /// averaged: the window is [(1 − f)·FED_end, FED_end]. Dimensionless.
+    pub residual_fraction: f64,
+}
+
+impl Default for SummaryOptions {
+    fn default() -> Self {
+        SummaryOptions {
+            energy_fed_limit: Some(1e-3),
+            residual_fraction: 0.2,
+        }
+    }
+}
+
+/// Scalar summary of one curve (SI units).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct CurveSummary {
+    /// Largest σ_mb over the curve, Pa.
+    pub peak_bond_stress: f64,
+    /// FED of the first step where the peak is reached, m.
+    pub fed_at_peak: f64,
+    /// Step number where the peak is reached.
+    pub step_at_peak: u64,
+    /// ∫ σ_mb dFED from the unloaded state up to `energy_fed_limit`, J/m²
+    /// (= Pa·m = N/m: work per unit bar–concrete contact area). `None` when
+    /// the curve stops before that FED.
+    pub energy: Option<f64>,
+    /// FED up to which `energy` is integrated, m.
+    pub energy_fed_limit: f64,
+    /// Mean σ_mb over the last `residual_fraction` of the final FED, Pa.
+    pub residual_bond_stress: f64,
+    /// Fraction of the final FED used for `residual_bond_stress`.
+    pub residual_fraction: f64,
+    /// FED of the last converged step, m.
+    pub final_fed: f64,
+    /// Largest FED reached, m.
+    pub max_fed: f64,
+    /// Converged steps in the curve.
+    pub steps: usize,
+    /// Newton iterations summed over the steps.
+    pub total_iterations: u64,
+}
+
+impl CurveSummary {
+    /// Entries for a study table, in a fixed order, with the unit in each
+    /// name: stresses in MPa, displacements in mm, energy in J/m².
+    pub fn table_entries(&self) -> Vec<(String, Cell)> {
+        let num = |x: f64| Cell::Num(x);
+        vec![
+            ("peak_bond_stress_MPa".into(), num(self.peak_bond_stress * 1e-6)),
+            ("fed_at_peak_mm".into(), num(self.fed_at_peak * 1e3)),
+            (
+                format!("energy_to_{}mm_J_per_m2", fmt_mm(self.energy_fed_limit)),
+                self.energy.map_or(Cell::Empty, Cell::Num),
+            ),
+            (
+                "residual_bond_stress_MPa".into(),
+                num(self.residual_bond_stress * 1e-6),
+            ),
+            ("final_fed_mm".into(), num(self.final_fed * 1e3)),
+            ("steps".into(), Cell::Int(self.steps as i64)),
+            ("iterations".into(), Cell::Int(self.total_iterations as i64)),
+        ]
+    }
+}
+
+fn fmt_mm(m: f64) -> String {
+    // Shortest decimal that round-trips, so 1e-3 m prints as "1", 5e-4 as "0.5".
+    format!("{}", (m * 1e3 * 1e9).round() / 1e9)
+}
+
+fn check_rows(rows: &[CurveRow]) -> Result<(), PostError> {
+    if rows.is_empty() {
+        return Err(PostError::invalid("curve", "has no steps"));
+    }
+    if let Some(r) = rows
+        .iter()
+        .find(|r| !r.fed.is_finite() || !r.bond_stress.is_finite())
+    {
+        return Err(PostError::invalid(
+            format!("curve step {}", r.step),
+            "FED or bond stress is not finite",
+        ));
+    }
+    Ok(())
+}
+
+/// The polyline's vertices: the unloaded state then the steps, as (FED, σ_mb).
+fn vertices(rows: &[CurveRow]) -> impl Iterator<Item = (f64, f64)> + '_ {
+    std::iter::once((0.0, 0.0)).chain(rows.iter().map(|r| (r.fed, r.bond_stress)))
+}
+
+/// Peak σ_mb (Pa), the FED at it (m) and its step; the first step wins ties.
+pub fn peak_bond_stress(rows: &[CurveRow]) -> Result<(f64, f64, u64), PostError> {
+    check_rows(rows)?;
+    let mut best = &rows[0];
+    for r in rows {
+        if r.bond_stress > best.bond_stress {
+            best = r;
+        }
+    }
+    Ok((best.bond_stress, best.fed, best.step))
+}
+
+/// Energy ∫ σ_mb dFED (J/m²) from the unloaded state until the curve first
+/// reaches FED = `fed_limit` (m), linearly interpolated inside the last
+/// segment. Errors if the curve never reaches `fed_limit`.
+pub fn energy_to_fed(rows: &[CurveRow], fed_limit: f64) -> Result<f64, PostError> {
+    check_rows(rows)?;
+    if !(fed_limit.is_finite() && fed_limit > 0.0) {
+        return Err(PostError::invalid(
+            "energy FED limit",
+            format!("{fed_limit} m must be finite and > 0"),
+        ));
+    }
+    let mut energy = 0.0;
+    let mut prev = (0.0, 0.0);
+    for (fed, s) in vertices(rows).skip(1) {
+        let (fed0, s0) = prev;
+        if fed0 < fed_limit && fed >= fed_limit {
+            let t = (fed_limit - fed0) / (fed - fed0);
+            let s_lim = s0 + t * (s - s0);
+            return Ok(energy + 0.5 * (s0 + s_lim) * (fed_limit - fed0));
+        }
+        energy += 0.5 * (s0 + s) * (fed - fed0);
+        prev = (fed, s);
+    }
+    Err(PostError::FedLimitBeyondCurve {
+        limit: fed_limit,
+        final_fed: rows[rows.len() - 1].fed,
+        max_fed: rows.iter().map(|r| r.fed).fold(f64::NEG_INFINITY, f64::max),
+    })
+}
+
+/// Residual σ_mb (Pa): the mean of σ_mb over the window
+/// [(1 − f)·FED_end, FED_end] of the curve's tail, i.e.
+/// (1 / (f·FED_end)) ∫ σ_mb dFED over the steps after the curve last
+/// entered the window. An FED-weighted mean, so it does not depend on how
+/// densely the solver stepped.
+pub fn residual_bond_stress(rows: &[CurveRow], fraction: f64) -> Result<f64, PostError> {
+    check_rows(rows)?;
+    if !(fraction > 0.0 && fraction <= 1.0) {
+        return Err(PostError::invalid(
+            "residual fraction",
+            format!("{fraction} must be in (0, 1]"),
+        ));
+    }
+    let end = rows[rows.len() - 1].fed;
+    if end <= 0.0 {
+        return Err(PostError::invalid(
+            "curve",
+            format!("final FED {end} m is not positive: no residual window"),
+        ));
+    }
+    let lower = (1.0 - fraction) * end;
+    let v: Vec<(f64, f64)> = vertices(rows).collect();
+    let mut integral = 0.0;
+    for i in (1..v.len()).rev() {
+        let (fed0, s0) = v[i - 1];
+        let (fed1, s1) = v[i];
+        if fed0 <= lower {
+            // The window starts inside this segment (or at its start).
+            if fed1 > lower {
+                let t = (lower - fed0) / (fed1 - fed0);
+                let s_low = s0 + t * (s1 - s0);
+                integral += 0.5 * (s_low + s1) * (fed1 - lower);
+            }
+            break;
+        }
+        integral += 0.5 * (s0 + s1) * (fed1 - fed0);
+    }
+    Ok(integral / (end - lower))
+}
+
+/// Peak, energy, residual and counts of one curve.
+pub fn summarize(rows: &[CurveRow], opts: &SummaryOptions) -> Result<CurveSummary, PostError> {
+    check_rows(rows)?;
+    let (peak, fed_at_peak, step_at_peak) = peak_bond_stress(rows)?;
+    let final_fed = rows[rows.len() - 1].fed;
+    let energy_fed_limit = opts.energy_fed_limit.unwrap_or(final_fed);
+    let energy = match energy_to_fed(rows, energy_fed_limit) {
+        Ok(e) => Some(e),
+        Err(PostError::FedLimitBeyondCurve { .. }) => None,
+        Err(e) => return Err(e),
+    };
+    Ok(CurveSummary {
+        peak_bond_stress: peak,
+        fed_at_peak,
+        step_at_peak,
+        energy,
+        energy_fed_limit,
+        residual_bond_stress: residual_bond_stress(rows, opts.residual_fraction)?,
+        residual_fraction: opts.residual_fraction,
+        final_fed,
+        max_fed: rows.iter().map(|r| r.fed).fold(f64::NEG_INFINITY, f64::max),
+        steps: rows.len(),
+        total_iterations: rows.iter().map(|r| r.iterations).sum(),
+    })
+}

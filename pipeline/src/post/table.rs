@@ -1,0 +1,333 @@
+//! Study and convergence tables, written as CSV (full precision, for
+//! machines) and Markdown (four significant digits, for people).
+
+use super::fsutil::write_atomic;
+use super::{ConvergenceStudy, PostError};
+use std::path::Path;
+
+/// One table cell.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Cell {
+    Int(i64),
+    Num(f64),
+    Text(String),
+    /// A value this row does not have.
+    Empty,
+}
+
+impl From<f64> for Cell {
+    fn from(x: f64) -> Self {
+        Cell::Num(x)
+    }
+}
+impl From<i64> for Cell {
+    fn from(x: i64) -> Self {
+        Cell::Int(x)
+    }
+}
+impl From<u64> for Cell {
+    fn from(x: u64) -> Self {
+        i64::try_from(x).map_or(Cell::Num(x as f64), Cell::Int)
+    }
+}
+impl From<usize> for Cell {
+    fn from(x: usize) -> Self {
+        Cell::from(x as u64)
+    }
+}
+impl From<&str> for Cell {
+    fn from(x: &str) -> Self {
+        Cell::Text(x.to_string())
+    }
+}
+impl From<String> for Cell {
+    fn from(x: String) -> Self {
+        Cell::Text(x)
+    }
+}
+impl<T: Into<Cell>> From<Option<T>> for Cell {
+    fn from(x: Option<T>) -> Self {
+        x.map_or(Cell::Empty, Into::into)
+    }
+}
+impl From<&serde_json::Value> for Cell {
+    /// Numbers stay numbers, strings text, null empty; anything else is
+    /// shown as compact JSON text.
+    fn from(v: &serde_json::Value) -> Self {
+        match v {
+            serde_json::Value::Null => Cell::Empty,
+            serde_json::Value::Number(n) => match n.as_i64() {
+                Some(i) => Cell::Int(i),
+                None => Cell::Num(n.as_f64().unwrap_or(f64::NAN)),
+            },
+            serde_json::Value::String(s) => Cell::Text(s.clone()),
+            other => Cell::Text(other.to_string()),
+        }
+    }
+}
+
+impl Cell {
+    fn is_numeric(&self) -> bool {
+        matches!(self, Cell::Int(_) | Cell::Num(_))
+    }
+
+    fn csv(&self) -> String {
+        match self {
+            Cell::Int(i) => i.to_string(),
+            Cell::Num(x) => csv_number(*x),
+            Cell::Text(s) => {
+                if s.contains([',', '"', '\n', '\r']) {
+                    format!("\"{}\"", s.replace('"', "\"\""))
+                } else {
+                    s.clone()
+                }
+            }
+            Cell::Empty => String::new(),
+        }
+    }
+
+    fn markdown(&self) -> String {
+        match self {
+            Cell::Int(i) => i.to_string(),
+            Cell::Num(x) => significant(*x, 4),
+            Cell::Text(s) => md_escape(s),
+            Cell::Empty => String::new(),
+        }
+    }
+}
+
+/// Shortest text that reads back to the same f64.
+fn csv_number(x: f64) -> String {
+    if x == 0.0 || !x.is_finite() || (1e-4..1e15).contains(&x.abs()) {
+        format!("{x}")
+    } else {
+        format!("{x:e}")
+    }
+}
+
+/// `x` with `digits` significant digits; scientific outside [1e-3, 1e6).
+fn significant(x: f64, digits: usize) -> String {
+    if x == 0.0 {
+        return "0".into();
+    }
+    if !x.is_finite() {
+        return format!("{x}");
+    }
+    let mag = x.abs().log10().floor() as i32;
+    if (-3..6).contains(&mag) {
+        let decimals = (digits as i32 - 1 - mag).max(0) as usize;
+        format!("{x:.decimals$}")
+    } else {
+        format!("{x:.prec$e}", prec = digits - 1)
+    }
+}
+
+fn md_escape(s: &str) -> String {
+    s.replace('|', "\\|").replace('\n', " ")
+}
+
+/// A rectangular table with named columns.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Table {
+    pub columns: Vec<String>,
+    /// Each row has one cell per column.
+    pub rows: Vec<Vec<Cell>>,
+}
+
+impl Table {
+    /// RFC 4180 CSV: a header line then one line per row.
+    pub fn to_csv(&self) -> String {
+        let mut out = String::new();
+        let header: Vec<String> = self
+            .columns
+            .iter()
+            .map(|c| Cell::Text(c.clone()).csv())
+            .collect();
+        out.push_str(&header.join(","));
+        out.push('\n');
+        for row in &self.rows {
+            let cells: Vec<String> = row.iter().map(Cell::csv).collect();
+            out.push_str(&cells.join(","));
+            out.push('\n');
+        }
+        out
+    }
+
+    /// A GitHub-flavoured Markdown table; numeric columns right-aligned.
+    pub fn to_markdown(&self) -> String {
+        let mut out = String::new();
+        let header: Vec<String> = self.columns.iter().map(|c| md_escape(c)).collect();
+        out.push_str(&format!("| {} |\n", header.join(" | ")));
+        let align: Vec<&str> = (0..self.columns.len())
+            .map(|j| {
+                let mut cells = self.rows.iter().map(|r| &r[j]).filter(|c| **c != Cell::Empty);
+                let numeric = cells.clone().next().is_some() && cells.all(Cell::is_numeric);
+                if numeric {
+                    "---:"
+                } else {
+                    "---"
+                }
+            })
+            .collect();
+        out.push_str(&format!("| {} |\n", align.join(" | ")));
+        for row in &self.rows {
+            let cells: Vec<String> = row.iter().map(Cell::markdown).collect();
+            out.push_str(&format!("| {} |\n", cells.join(" | ")));
+        }
+        out
+    }
+
+    /// Writes the CSV form to `path` (atomically; parent directories created).
+    pub fn write_csv(&self, path: &Path) -> Result<(), PostError> {
+        write_atomic(path, self.to_csv().as_bytes())
+    }
+
+    /// Writes the Markdown form to `path` (atomically; parent directories created).
+    pub fn write_markdown(&self, path: &Path) -> Result<(), PostError> {
+        write_atomic(path, self.to_markdown().as_bytes())
+    }
+}
+
+/// One case of a parameter study.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StudyCase {
+    /// Case name (unique within the study).
+    pub label: String,
+    /// The study's varied parameters for this case, as (spec key, value).
+    pub params: Vec<(String, Cell)>,
+    /// Summary quantities, as (name with unit, value), e.g. from
+    /// [`CurveSummary::table_entries`](super::CurveSummary::table_entries).
+    pub summary: Vec<(String, Cell)>,
+}
+
+/// Keys in order of first appearance over all cases.
+fn union_keys<'a>(lists: impl Iterator<Item = &'a [(String, Cell)]>) -> Vec<String> {
+    let mut keys: Vec<String> = Vec::new();
+    for list in lists {
+        for (k, _) in list {
+            if !keys.contains(k) {
+                keys.push(k.clone());
+            }
+        }
+    }
+    keys
+}
+
+fn lookup(list: &[(String, Cell)], key: &str) -> Cell {
+    list.iter()
+        .find(|(k, _)| k == key)
+        .map_or(Cell::Empty, |(_, c)| c.clone())
+}
+
+/// The study table: `case`, then parameter columns, then summary columns,
+/// each group in order of first appearance over the cases (so the order is
+/// fixed by the study, not by hashing); missing values are empty cells.
+pub fn study_table(cases: &[StudyCase]) -> Table {
+    let params = union_keys(cases.iter().map(|c| c.params.as_slice()));
+    let summary = union_keys(cases.iter().map(|c| c.summary.as_slice()));
+    let mut columns = vec!["case".to_string()];
+    columns.extend(params.iter().cloned());
+    columns.extend(summary.iter().cloned());
+    let rows = cases
+        .iter()
+        .map(|c| {
+            let mut row = vec![Cell::Text(c.label.clone())];
+            row.extend(params.iter().map(|k| lookup(&c.params, k)));
+            row.extend(summary.iter().map(|k| lookup(&c.summary, k)));
+            row
+        })
+        .collect();
+    Table { columns, rows }
+}
+
+/// Writes [`study_table`] as CSV and Markdown.
+pub fn write_study_tables(cases: &[StudyCase], csv: &Path, md: &Path) -> Result<(), PostError> {
+    let table = study_table(cases);
+    table.write_csv(csv)?;
+    table.write_markdown(md)
+}
+
+/// Per-grid lines of every quantity: quantity, h (mm), DOFs, value, relative
+/// error against the finest-triplet Richardson extrapolation, GCI, wall time (s).
+pub fn convergence_table(studies: &[ConvergenceStudy]) -> Table {
+    let columns = [
+        "quantity",
+        "h_mm",
+        "dofs",
+        "value",
+        "rel_error_vs_extrapolated",
+        "gci",
+        "wall_time_s",
+    ]
+    .map(String::from)
+    .to_vec();
+    let mut rows = Vec::new();
+    for s in studies {
+        for r in s.rows() {
+            rows.push(vec![
+                Cell::Text(s.quantity.clone()),
+                Cell::Num(r.h * 1e3),
+                r.dofs.into(),
+                Cell::Num(r.value),
+                r.rel_error_vs_extrapolated.into(),
+                r.gci.into(),
+                r.wall_time.into(),
+            ]);
+        }
+    }
+    Table { columns, rows }
+}
+
+/// One line per triplet of every quantity (finest triplet first): the grid
+/// sizes, behaviour, observed order, extrapolated value, e_a^21, e_ext^21,
+/// GCI_fine^21.
+pub fn convergence_order_table(studies: &[ConvergenceStudy]) -> Table {
+    let columns = [
+        "quantity",
+        "h_mm",
+        "behaviour",
+        "order_p",
+        "extrapolated",
+        "e_a21",
+        "e_ext21",
+        "gci_fine21",
+    ]
+    .map(String::from)
+    .to_vec();
+    let mut rows = Vec::new();
+    for s in studies {
+        for t in &s.triplets {
+            let hs: Vec<String> = t.h.iter().map(|h| significant(h * 1e3, 4)).collect();
+            rows.push(vec![
+                Cell::Text(s.quantity.clone()),
+                Cell::Text(hs.join(" / ")),
+                Cell::Text(t.kind.as_str().into()),
+                t.order.into(),
+                t.extrapolated.into(),
+                t.approx_rel_error.into(),
+                t.extrap_rel_error.into(),
+                t.gci_fine.into(),
+            ]);
+        }
+    }
+    Table { columns, rows }
+}
+
+/// Writes [`convergence_table`] as CSV, and a Markdown file holding both the
+/// per-grid table and [`convergence_order_table`].
+pub fn write_convergence_tables(
+    studies: &[ConvergenceStudy],
+    csv: &Path,
+    md: &Path,
+) -> Result<(), PostError> {
+    let grids = convergence_table(studies);
+    grids.write_csv(csv)?;
+    let text = format!(
+        "## Grids\n\nErrors and GCI are relative; the error is against the Richardson \
+         extrapolation of the three finest grids.\n\n{}\n## Observed order and \
+         extrapolation (Celik et al. 2008, safety factor 1.25)\n\n{}",
+        grids.to_markdown(),
+        convergence_order_table(studies).to_markdown()
+    );
+    write_atomic(md, text.as_bytes())
+}
