@@ -1,0 +1,594 @@
+//! Global assembly: DOF numbering with eliminated Dirichlet DOFs, the sparse
+//! pattern (lower triangle, CSC) built once per mesh with a scatter map per
+//! element, and the per-iteration refill of the tangent values and of the
+//! internal force vector, with the constitutive updates done in parallel.
+//!
+//! Global DOFs are node-major (`3·node + component`). Constrained DOFs are
+//! eliminated: they get no row or column; their values are set directly in
+//! the displacement vector, so the residual of the first iteration of a step
+//! already carries the effect of an imposed increment and every Newton
+//! correction is zero there. The system is symmetric whenever the laws'
+//! tangents are.
+
+use crate::element::{ElementError, TetGeometry};
+use crate::interface_element::{InterfaceKernel, INTERFACE_POINTS};
+use crate::laws::{BulkLaw, BulkState, InterfaceLaw, InterfaceState, LawError, TangentKind};
+use mesh::Model;
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+use std::sync::Arc;
+use std::time::Instant;
+
+/// A bulk law shared between elements (one per element where parameters
+/// depend on the element, e.g. Mazars' size l).
+pub type SharedBulkLaw = Arc<dyn BulkLaw + Send + Sync>;
+/// An interface law shared between elements.
+pub type SharedInterfaceLaw = Arc<dyn InterfaceLaw + Send + Sync>;
+
+/// The law of every element of a model.
+#[derive(Clone)]
+pub struct ElementLaws {
+    /// One law per tetrahedron (same order as `Model::tets`).
+    pub tets: Vec<SharedBulkLaw>,
+    /// One law per interface element; `None` leaves the element out
+    /// (the free, non-adhesive zone by default: its twins are unconnected).
+    pub interfaces: Vec<Option<SharedInterfaceLaw>>,
+}
+
+impl ElementLaws {
+    /// The same law per region: `concrete` and `steel` for the tets, the
+    /// adhesive and (optional) free-zone interface laws.
+    pub fn by_region(
+        model: &Model,
+        concrete: SharedBulkLaw,
+        steel: SharedBulkLaw,
+        adhesive: SharedInterfaceLaw,
+        free: Option<SharedInterfaceLaw>,
+    ) -> Self {
+        Self {
+            tets: model
+                .tet_region
+                .iter()
+                .map(|r| match r {
+                    mesh::Region::Concrete => concrete.clone(),
+                    mesh::Region::Steel => steel.clone(),
+                })
+                .collect(),
+            interfaces: model
+                .interfaces
+                .iter()
+                .map(|e| match e.zone {
+                    mesh::InterfaceZone::Adhesive => Some(adhesive.clone()),
+                    mesh::InterfaceZone::Free => free.clone(),
+                })
+                .collect(),
+        }
+    }
+}
+
+/// Committed or trial history of every integration point.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+pub struct States {
+    /// One per tetrahedron.
+    pub bulk: Vec<BulkState>,
+    /// [`INTERFACE_POINTS`] per interface element (node pair order).
+    pub interface: Vec<InterfaceState>,
+}
+
+impl States {
+    pub fn initial(model: &Model) -> Self {
+        Self {
+            bulk: vec![BulkState::default(); model.tets.len()],
+            interface: vec![InterfaceState::default(); INTERFACE_POINTS * model.interfaces.len()],
+        }
+    }
+}
+
+/// What went wrong while assembling.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum AssemblyError {
+    #[error("tetrahedron {index}: {source}")]
+    Element {
+        index: usize,
+        #[source]
+        source: ElementError,
+    },
+    #[error("model: {0}")]
+    Model(String),
+    #[error("tetrahedron {index} ({region:?}): {source}")]
+    BulkLaw {
+        index: usize,
+        region: mesh::Region,
+        #[source]
+        source: LawError,
+    },
+    #[error("interface element {index}, node pair {point}: {source}")]
+    InterfaceLaw {
+        index: usize,
+        point: usize,
+        #[source]
+        source: LawError,
+    },
+    #[error("non-finite {what} in tetrahedron {index}")]
+    NonFiniteBulk { index: usize, what: &'static str },
+    #[error("non-finite {what} in interface element {index}, node pair {point}")]
+    NonFiniteInterface {
+        index: usize,
+        point: usize,
+        what: &'static str,
+    },
+}
+
+const NONE: u32 = u32::MAX;
+const TET_LOWER: usize = 78;
+/// Lower-triangle entries of one node pair's 6×6 block (s_i, c_i).
+const PAIR_LOWER: usize = 21;
+
+/// Free/constrained numbering of the global DOFs.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DofMap {
+    /// Free index of each global DOF, or `u32::MAX` when constrained.
+    free: Vec<u32>,
+    n_free: usize,
+}
+
+impl DofMap {
+    /// `constrained`: global DOF indices (`3·node + component`), any order, repeats allowed.
+    pub fn new(n_nodes: usize, constrained: &[usize]) -> Self {
+        let mut free = vec![0u32; 3 * n_nodes];
+        for &d in constrained {
+            free[d] = NONE;
+        }
+        let mut n_free = 0usize;
+        for f in free.iter_mut() {
+            if *f != NONE {
+                *f = n_free as u32;
+                n_free += 1;
+            }
+        }
+        Self { free, n_free }
+    }
+    pub fn n_total(&self) -> usize {
+        self.free.len()
+    }
+    pub fn n_free(&self) -> usize {
+        self.n_free
+    }
+    /// Free index of global DOF `d`, if free.
+    pub fn free_index(&self, d: usize) -> Option<usize> {
+        let f = self.free[d];
+        (f != NONE).then_some(f as usize)
+    }
+    /// Copies the free entries of a global vector into `out` (length n_free).
+    pub fn gather(&self, global: &[f64], out: &mut [f64]) {
+        for (d, &f) in self.free.iter().enumerate() {
+            if f != NONE {
+                out[f as usize] = global[d];
+            }
+        }
+    }
+    /// Adds `scale · free` into the free entries of a global vector.
+    pub fn scatter_add(&self, free: &[f64], scale: f64, global: &mut [f64]) {
+        for (d, &f) in self.free.iter().enumerate() {
+            if f != NONE {
+                global[d] += scale * free[f as usize];
+            }
+        }
+    }
+}
+
+/// Wall time of one evaluation, s.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+pub struct EvalTimings {
+    /// Constitutive updates and element kernels (parallel).
+    pub constitutive: f64,
+    /// Scatter of element contributions into the global arrays.
+    pub assembly: f64,
+}
+
+/// The assembled problem of one mesh: geometry, DOF numbering, sparse pattern
+/// and scatter maps. Built once; [`System::evaluate`] refills values.
+pub struct System {
+    dofs: DofMap,
+    /// CSC column pointers of the lower triangle (free DOFs).
+    pub col_ptr: Vec<usize>,
+    /// CSC row indices (sorted within each column).
+    pub row_idx: Vec<usize>,
+    tets: Vec<[u32; 4]>,
+    tet_geom: Vec<TetGeometry>,
+    tet_region: Vec<mesh::Region>,
+    tet_map: Vec<[u32; TET_LOWER]>,
+    iface_nodes: Vec<[u32; 6]>,
+    iface_kernels: Vec<InterfaceKernel>,
+    /// Indices of the interface elements that carry a law.
+    iface_active: Vec<usize>,
+    /// Per active element, per node pair, lower entries of its 6×6 block.
+    iface_map: Vec<[[u32; PAIR_LOWER]; INTERFACE_POINTS]>,
+}
+
+/// Block size of the parallel constitutive pass (elements).
+const BLOCK: usize = 8192;
+
+fn tet_dofs(t: &[u32; 4]) -> [usize; 12] {
+    std::array::from_fn(|i| 3 * t[i / 3] as usize + i % 3)
+}
+
+fn pair_dofs(nodes: &[u32; 6], p: usize) -> [usize; 6] {
+    std::array::from_fn(|i| {
+        let node = if i < 3 { nodes[p] } else { nodes[p + 3] };
+        3 * node as usize + i % 3
+    })
+}
+
+impl System {
+    /// Builds geometry, pattern and scatter maps. `constrained` as in [`DofMap::new`];
+    /// `active_interfaces[i]` tells whether interface element `i` is assembled.
+    pub fn new(
+        model: &Model,
+        constrained: &[usize],
+        active_interfaces: &[bool],
+    ) -> Result<Self, AssemblyError> {
+        let n_nodes = model.nodes.len();
+        if model.tet_region.len() != model.tets.len() {
+            return Err(AssemblyError::Model(format!(
+                "{} tets but {} tet regions",
+                model.tets.len(),
+                model.tet_region.len()
+            )));
+        }
+        for (i, t) in model.tets.iter().enumerate() {
+            if t.iter().any(|&n| n as usize >= n_nodes) {
+                return Err(AssemblyError::Model(format!(
+                    "tet {i} references a node ≥ {n_nodes}"
+                )));
+            }
+        }
+        for (i, e) in model.interfaces.iter().enumerate() {
+            if e.nodes.iter().any(|&n| n as usize >= n_nodes) {
+                return Err(AssemblyError::Model(format!(
+                    "interface element {i} references a node ≥ {n_nodes}"
+                )));
+            }
+        }
+        if active_interfaces.len() != model.interfaces.len() {
+            return Err(AssemblyError::Model(
+                "one activity flag per interface element expected".into(),
+            ));
+        }
+        let dofs = DofMap::new(n_nodes, constrained);
+        let tet_geom = model
+            .tets
+            .par_iter()
+            .enumerate()
+            .map(|(index, t)| {
+                let x = t.map(|n| model.nodes[n as usize]);
+                TetGeometry::new(&x).map_err(|source| AssemblyError::Element { index, source })
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        let iface_active: Vec<usize> = (0..model.interfaces.len())
+            .filter(|&i| active_interfaces[i])
+            .collect();
+
+        // Node graph (lower: neighbour ≥ node), from tets and node pairs.
+        let mut adj: Vec<Vec<u32>> = vec![Vec::new(); n_nodes];
+        for t in &model.tets {
+            for &a in t {
+                for &b in t {
+                    if a >= b {
+                        adj[b as usize].push(a);
+                    }
+                }
+            }
+        }
+        for &i in &iface_active {
+            let n = &model.interfaces[i].nodes;
+            for p in 0..3 {
+                for (a, b) in [(n[p], n[p]), (n[p + 3], n[p + 3]), (n[p], n[p + 3])] {
+                    let (hi, lo) = if a >= b { (a, b) } else { (b, a) };
+                    adj[lo as usize].push(hi);
+                }
+            }
+        }
+        adj.par_iter_mut().for_each(|v| {
+            v.sort_unstable();
+            v.dedup();
+        });
+        let mut col_ptr = Vec::with_capacity(dofs.n_free + 1);
+        let mut row_idx = Vec::new();
+        col_ptr.push(0);
+        for (b, nbrs) in adj.iter().enumerate() {
+            for cb in 0..3 {
+                let Some(j) = dofs.free_index(3 * b + cb) else {
+                    continue;
+                };
+                for &a in nbrs {
+                    for ca in 0..3 {
+                        if let Some(i) = dofs.free_index(3 * a as usize + ca) {
+                            if i >= j {
+                                row_idx.push(i);
+                            }
+                        }
+                    }
+                }
+                col_ptr.push(row_idx.len());
+            }
+        }
+        if row_idx.len() >= NONE as usize {
+            return Err(AssemblyError::Model(
+                "too many matrix entries for 32-bit scatter maps".into(),
+            ));
+        }
+        let position = |gi: usize, gj: usize| -> u32 {
+            match (dofs.free_index(gi), dofs.free_index(gj)) {
+                (Some(i), Some(j)) => {
+                    let (r, c) = if i >= j { (i, j) } else { (j, i) };
+                    let col = &row_idx[col_ptr[c]..col_ptr[c + 1]];
+                    let k = col
+                        .binary_search(&r)
+                        .expect("pattern holds every element entry");
+                    (col_ptr[c] + k) as u32
+                }
+                _ => NONE,
+            }
+        };
+        let tet_map = model
+            .tets
+            .par_iter()
+            .map(|t| {
+                let d = tet_dofs(t);
+                let mut m = [NONE; TET_LOWER];
+                let mut k = 0;
+                for a in 0..12 {
+                    for b in 0..=a {
+                        m[k] = position(d[a], d[b]);
+                        k += 1;
+                    }
+                }
+                m
+            })
+            .collect();
+        let iface_map = iface_active
+            .iter()
+            .map(|&i| {
+                let nodes = &model.interfaces[i].nodes;
+                std::array::from_fn(|p| {
+                    let d = pair_dofs(nodes, p);
+                    let mut m = [NONE; PAIR_LOWER];
+                    let mut k = 0;
+                    for a in 0..6 {
+                        for b in 0..=a {
+                            m[k] = position(d[a], d[b]);
+                            k += 1;
+                        }
+                    }
+                    m
+                })
+            })
+            .collect();
+        Ok(Self {
+            dofs,
+            col_ptr,
+            row_idx,
+            tets: model.tets.clone(),
+            tet_geom,
+            tet_region: model.tet_region.clone(),
+            tet_map,
+            iface_nodes: model.interfaces.iter().map(|e| e.nodes).collect(),
+            iface_kernels: model.interfaces.iter().map(InterfaceKernel::new).collect(),
+            iface_active,
+            iface_map,
+        })
+    }
+
+    pub fn dofs(&self) -> &DofMap {
+        &self.dofs
+    }
+    /// Number of stored (lower-triangle) matrix entries.
+    pub fn nnz(&self) -> usize {
+        self.row_idx.len()
+    }
+    pub fn tet_geometry(&self) -> &[TetGeometry] {
+        &self.tet_geom
+    }
+
+    /// Constitutive update at every integration point for the global
+    /// displacement `u` (m, length 3·nodes) from the `committed` states:
+    /// writes the trial states, the internal force `f_int` (N, global) and,
+    /// when `matrix` is given, the lower-triangle tangent values (N/m) of the
+    /// tangent `kind`.
+    pub fn evaluate(
+        &self,
+        laws: &ElementLaws,
+        u: &[f64],
+        committed: &States,
+        trial: &mut States,
+        kind: TangentKind,
+        f_int: &mut [f64],
+        mut matrix: Option<&mut [f64]>,
+    ) -> Result<EvalTimings, AssemblyError> {
+        let mut timings = EvalTimings::default();
+        f_int.iter_mut().for_each(|v| *v = 0.0);
+        if let Some(m) = matrix.as_deref_mut() {
+            m.iter_mut().for_each(|v| *v = 0.0);
+        }
+        let want_k = matrix.is_some();
+
+        // Tets, block by block: parallel kernels into buffers, serial scatter.
+        let mut fbuf = vec![[0.0f64; 12]; BLOCK.min(self.tets.len())];
+        let mut kbuf = vec![[0.0f64; TET_LOWER]; if want_k { fbuf.len() } else { 0 }];
+        let n_tets = self.tets.len();
+        let mut start = 0;
+        while start < n_tets {
+            let end = (start + BLOCK).min(n_tets);
+            let len = end - start;
+            let t0 = Instant::now();
+            let states = &mut trial.bulk[start..end];
+            let kslice: &mut [[f64; TET_LOWER]] = if want_k { &mut kbuf[..len] } else { &mut [] };
+            let body = |(off, (state, f)): (usize, (&mut BulkState, &mut [f64; 12])),
+                        k: Option<&mut [f64; TET_LOWER]>|
+             -> Result<(), AssemblyError> {
+                let index = start + off;
+                let g = &self.tet_geom[index];
+                let d = tet_dofs(&self.tets[index]);
+                let ue: [f64; 12] = std::array::from_fn(|i| u[d[i]]);
+                let strain = g.strain(&ue);
+                let r = laws.tets[index]
+                    .step(&committed.bulk[index], &strain, kind)
+                    .map_err(|source| AssemblyError::BulkLaw {
+                        index,
+                        region: self.tet_region[index],
+                        source,
+                    })?;
+                if !r.stress.iter().all(|v| v.is_finite()) {
+                    return Err(AssemblyError::NonFiniteBulk {
+                        index,
+                        what: "stress",
+                    });
+                }
+                *state = r.state;
+                g.internal_force(&r.stress, f);
+                if let Some(k) = k {
+                    if !r.tangent.iter().all(|v| v.is_finite()) {
+                        return Err(AssemblyError::NonFiniteBulk {
+                            index,
+                            what: "tangent",
+                        });
+                    }
+                    let mut full = [0.0; 144];
+                    g.stiffness(&r.tangent, &mut full);
+                    let mut c = 0;
+                    for a in 0..12 {
+                        for b in 0..=a {
+                            k[c] = full[12 * a + b];
+                            c += 1;
+                        }
+                    }
+                }
+                Ok(())
+            };
+            if want_k {
+                states
+                    .par_iter_mut()
+                    .zip(fbuf[..len].par_iter_mut())
+                    .zip(kslice.par_iter_mut())
+                    .enumerate()
+                    .try_for_each(|(off, ((s, f), k))| body((off, (s, f)), Some(k)))?;
+            } else {
+                states
+                    .par_iter_mut()
+                    .zip(fbuf[..len].par_iter_mut())
+                    .enumerate()
+                    .try_for_each(|(off, (s, f))| body((off, (s, f)), None))?;
+            }
+            timings.constitutive += t0.elapsed().as_secs_f64();
+            let t1 = Instant::now();
+            for off in 0..len {
+                let index = start + off;
+                let d = tet_dofs(&self.tets[index]);
+                for (i, &di) in d.iter().enumerate() {
+                    f_int[di] += fbuf[off][i];
+                }
+                if let Some(m) = matrix.as_deref_mut() {
+                    for (c, &pos) in self.tet_map[index].iter().enumerate() {
+                        if pos != NONE {
+                            m[pos as usize] += kbuf[off][c];
+                        }
+                    }
+                }
+            }
+            timings.assembly += t1.elapsed().as_secs_f64();
+            start = end;
+        }
+
+        // Interfaces: few compared with tets; one parallel pass.
+        let t0 = Instant::now();
+        type PairOut = ([f64; 18], [[f64; PAIR_LOWER]; INTERFACE_POINTS]);
+        let results: Vec<(usize, [InterfaceState; INTERFACE_POINTS], PairOut)> = self
+            .iface_active
+            .par_iter()
+            .map(|&index| {
+                let law = laws.interfaces[index].as_ref().ok_or_else(|| {
+                    AssemblyError::Model(format!(
+                        "interface element {index} is active but has no law"
+                    ))
+                })?;
+                let kern = &self.iface_kernels[index];
+                let nodes = &self.iface_nodes[index];
+                let ue: [f64; 18] = std::array::from_fn(|i| u[3 * nodes[i / 3] as usize + i % 3]);
+                let mut f = [0.0; 18];
+                let mut klow = [[0.0; PAIR_LOWER]; INTERFACE_POINTS];
+                let mut st = [InterfaceState::default(); INTERFACE_POINTS];
+                for p in 0..INTERFACE_POINTS {
+                    let jump = kern.local_jump(&ue, p);
+                    let r = law
+                        .step(
+                            &committed.interface[INTERFACE_POINTS * index + p],
+                            &jump,
+                            kind,
+                        )
+                        .map_err(|source| AssemblyError::InterfaceLaw {
+                            index,
+                            point: p,
+                            source,
+                        })?;
+                    if !r.traction.iter().all(|v| v.is_finite()) {
+                        return Err(AssemblyError::NonFiniteInterface {
+                            index,
+                            point: p,
+                            what: "traction",
+                        });
+                    }
+                    st[p] = r.state;
+                    kern.add_force(p, &r.traction, &mut f);
+                    if want_k {
+                        if !r.tangent.iter().all(|v| v.is_finite()) {
+                            return Err(AssemblyError::NonFiniteInterface {
+                                index,
+                                point: p,
+                                what: "tangent",
+                            });
+                        }
+                        let mut full = [0.0; 324];
+                        kern.add_stiffness(p, &r.tangent, &mut full);
+                        let d: [usize; 6] = std::array::from_fn(|i| {
+                            if i < 3 {
+                                3 * p + i
+                            } else {
+                                3 * (p + 3) + i - 3
+                            }
+                        });
+                        let mut c = 0;
+                        for a in 0..6 {
+                            for b in 0..=a {
+                                klow[p][c] = full[18 * d[a] + d[b]];
+                                c += 1;
+                            }
+                        }
+                    }
+                }
+                Ok((index, st, (f, klow)))
+            })
+            .collect::<Result<_, AssemblyError>>()?;
+        timings.constitutive += t0.elapsed().as_secs_f64();
+        let t1 = Instant::now();
+        for (slot, (index, st, (f, klow))) in results.into_iter().enumerate() {
+            trial.interface[INTERFACE_POINTS * index..INTERFACE_POINTS * (index + 1)]
+                .copy_from_slice(&st);
+            let nodes = &self.iface_nodes[index];
+            for (i, fi) in f.iter().enumerate() {
+                f_int[3 * nodes[i / 3] as usize + i % 3] += fi;
+            }
+            if let Some(m) = matrix.as_deref_mut() {
+                for p in 0..INTERFACE_POINTS {
+                    for (c, &pos) in self.iface_map[slot][p].iter().enumerate() {
+                        if pos != NONE {
+                            m[pos as usize] += klow[p][c];
+                        }
+                    }
+                }
+            }
+        }
+        timings.assembly += t1.elapsed().as_secs_f64();
+        Ok(timings)
+    }
+}

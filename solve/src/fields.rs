@@ -1,0 +1,1 @@
+//! VTU output of fields.

@@ -1,0 +1,413 @@
+//! Linear solvers for the symmetric tangent systems (lower triangle, CSC).
+//!
+//! * [`Cholesky`]: faer's sparse LLᵀ with the symbolic analysis (ordering,
+//!   elimination tree, supernodes) done once per mesh and the numeric
+//!   factorisation redone on new values. The fill-reducing ordering is METIS
+//!   nested dissection on the node graph, expanded to each node's DOFs
+//!   (SPEC §9: 3× faster and half the memory of faer's AMD at 285 k DOFs),
+//!   or faer's AMD.
+//! * [`pcg`]: conjugate gradients on the current matrix preconditioned by an
+//!   older Cholesky factor, so one factorisation serves many iterations and
+//!   steps while the tangent drifts slowly (damage, friction).
+
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::perm::PermRef;
+use faer::sparse::linalg::cholesky::{
+    factorize_symbolic_cholesky, CholeskySymbolicParams, LltRef, SymbolicCholesky,
+    SymmetricOrdering,
+};
+use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
+use faer::{Conj, MatMut, Par, Side};
+use serde::{Deserialize, Serialize};
+
+/// Fill-reducing ordering of the Cholesky factor.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum Ordering {
+    /// METIS nested dissection on the node graph (METIS_NodeND).
+    #[default]
+    Metis,
+    /// faer's approximate minimum degree.
+    Amd,
+}
+
+/// Why a linear solve failed.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum LinearError {
+    #[error("matrix is not positive definite (non-positive pivot at permuted column {index})")]
+    NotPositiveDefinite { index: usize },
+    #[error("symbolic Cholesky analysis failed: {0}")]
+    Symbolic(String),
+    #[error("METIS ordering failed with status {0}")]
+    Metis(i32),
+    #[error("out of memory for the factorisation workspace")]
+    OutOfMemory,
+    #[error("conjugate gradients did not reach relative residual {tolerance:e} in {iterations} iterations (reached {reached:e})")]
+    PcgNotConverged {
+        iterations: usize,
+        tolerance: f64,
+        reached: f64,
+    },
+    #[error("non-finite value in the linear solve")]
+    NonFinite,
+}
+
+/// A symmetric matrix given by its lower triangle in CSC form.
+#[derive(Debug, Clone, Copy)]
+pub struct SymLower<'a> {
+    pub col_ptr: &'a [usize],
+    pub row_idx: &'a [usize],
+    pub values: &'a [f64],
+}
+
+impl SymLower<'_> {
+    pub fn n(&self) -> usize {
+        self.col_ptr.len() - 1
+    }
+
+    /// y = A x.
+    pub fn mul(&self, x: &[f64], y: &mut [f64]) {
+        y.iter_mut().for_each(|v| *v = 0.0);
+        for j in 0..self.n() {
+            let xj = x[j];
+            let mut acc = 0.0;
+            for k in self.col_ptr[j]..self.col_ptr[j + 1] {
+                let i = self.row_idx[k];
+                let a = self.values[k];
+                if i == j {
+                    acc += a * xj;
+                } else {
+                    y[i] += a * xj;
+                    acc += a * x[i];
+                }
+            }
+            y[j] += acc;
+        }
+    }
+}
+
+/// METIS nested-dissection permutation of the DOFs: METIS_NodeND on the
+/// graph of nodes (`dof_node[i]` = node of free DOF `i`, nondecreasing), each
+/// node's DOFs kept together. Returns (forward, inverse) with
+/// `forward[new] = old`.
+pub fn metis_ordering(
+    col_ptr: &[usize],
+    row_idx: &[usize],
+    dof_node: &[usize],
+) -> Result<(Vec<usize>, Vec<usize>), LinearError> {
+    let n = col_ptr.len() - 1;
+    // Compress node ids to 0..m and record each node's first DOF.
+    let mut node_first = Vec::new();
+    let mut dof_cnode = vec![0usize; n];
+    for i in 0..n {
+        if i == 0 || dof_node[i] != dof_node[i - 1] {
+            node_first.push(i);
+        }
+        dof_cnode[i] = node_first.len() - 1;
+    }
+    let m = node_first.len();
+    node_first.push(n);
+    let mut adj: Vec<Vec<i32>> = vec![Vec::new(); m];
+    for j in 0..n {
+        let b = dof_cnode[j];
+        for &i in &row_idx[col_ptr[j]..col_ptr[j + 1]] {
+            let a = dof_cnode[i];
+            if a != b {
+                adj[a].push(b as i32);
+                adj[b].push(a as i32);
+            }
+        }
+    }
+    let mut xadj = Vec::with_capacity(m + 1);
+    let mut adjncy = Vec::new();
+    xadj.push(0i32);
+    for v in adj.iter_mut() {
+        v.sort_unstable();
+        v.dedup();
+        adjncy.extend_from_slice(v);
+        xadj.push(adjncy.len() as i32);
+    }
+    let mut perm = vec![0i32; m];
+    let mut iperm = vec![0i32; m];
+    if m > 1 {
+        let mut nv = m as i32;
+        let mut options = [0i32; metis_sys::METIS_NOPTIONS as usize];
+        // SAFETY: arrays sized as METIS documents (xadj m+1, adjncy 2|E|, perm/iperm m).
+        let status = unsafe {
+            metis_sys::METIS_SetDefaultOptions(options.as_mut_ptr());
+            // C numbering (0-based) is the default.
+            metis_sys::METIS_NodeND(
+                &mut nv,
+                xadj.as_mut_ptr(),
+                adjncy.as_mut_ptr(),
+                std::ptr::null_mut(),
+                options.as_mut_ptr(),
+                perm.as_mut_ptr(),
+                iperm.as_mut_ptr(),
+            )
+        };
+        if status != metis_sys::rstatus_et_METIS_OK {
+            return Err(LinearError::Metis(status));
+        }
+    }
+    let mut fwd = Vec::with_capacity(n);
+    for &node in &perm {
+        let node = node as usize;
+        fwd.extend(node_first[node]..node_first[node + 1]);
+    }
+    let mut inv = vec![0usize; n];
+    for (new, &old) in fwd.iter().enumerate() {
+        inv[old] = new;
+    }
+    Ok((fwd, inv))
+}
+
+/// Sparse Cholesky with a reusable symbolic analysis.
+pub struct Cholesky {
+    symbolic: SymbolicCholesky<usize>,
+    col_ptr: Vec<usize>,
+    row_idx: Vec<usize>,
+    factor: Vec<f64>,
+    factored: bool,
+}
+
+impl Cholesky {
+    /// Symbolic analysis of the lower-triangle pattern. `dof_node` (node of
+    /// each DOF, nondecreasing) is needed for [`Ordering::Metis`].
+    pub fn new(
+        col_ptr: &[usize],
+        row_idx: &[usize],
+        ordering: Ordering,
+        dof_node: &[usize],
+    ) -> Result<Self, LinearError> {
+        let n = col_ptr.len() - 1;
+        let sym = SymbolicSparseColMatRef::new_checked(n, n, col_ptr, None, row_idx);
+        let perm;
+        let ord = match ordering {
+            Ordering::Amd => SymmetricOrdering::Amd,
+            Ordering::Metis => {
+                perm = metis_ordering(col_ptr, row_idx, dof_node)?;
+                SymmetricOrdering::Custom(PermRef::new_checked(&perm.0, &perm.1, n))
+            }
+        };
+        let symbolic =
+            factorize_symbolic_cholesky(sym, Side::Lower, ord, CholeskySymbolicParams::default())
+                .map_err(|e| LinearError::Symbolic(format!("{e:?}")))?;
+        let len = symbolic.len_val();
+        Ok(Self {
+            symbolic,
+            col_ptr: col_ptr.to_vec(),
+            row_idx: row_idx.to_vec(),
+            factor: vec![0.0; len],
+            factored: false,
+        })
+    }
+
+    /// Number of stored entries of the factor L.
+    pub fn factor_len(&self) -> usize {
+        self.factor.len()
+    }
+
+    /// Whether a numeric factorisation is available.
+    pub fn is_factored(&self) -> bool {
+        self.factored
+    }
+
+    /// Numeric factorisation of the matrix with the analysed pattern.
+    pub fn factorize(&mut self, values: &[f64]) -> Result<(), LinearError> {
+        self.factored = false;
+        let n = self.col_ptr.len() - 1;
+        let sym = SymbolicSparseColMatRef::new_checked(n, n, &self.col_ptr, None, &self.row_idx);
+        let a = SparseColMatRef::new(sym, values);
+        let par = faer::get_global_parallelism();
+        let req = self
+            .symbolic
+            .factorize_numeric_llt_scratch::<f64>(par, Default::default());
+        let mut buf = MemBuffer::try_new(req).map_err(|_| LinearError::OutOfMemory)?;
+        self.symbolic
+            .factorize_numeric_llt::<f64>(
+                &mut self.factor,
+                a,
+                Side::Lower,
+                Default::default(),
+                par,
+                MemStack::new(&mut buf),
+                Default::default(),
+            )
+            .map_err(|e| match e {
+                faer::linalg::cholesky::llt::factor::LltError::NonPositivePivot { index } => {
+                    LinearError::NotPositiveDefinite { index }
+                }
+            })?;
+        self.factored = true;
+        Ok(())
+    }
+
+    /// Solves L Lᵀ x = b in place (`rhs` holds b on entry, x on exit).
+    pub fn solve_in_place(&self, rhs: &mut [f64]) -> Result<(), LinearError> {
+        assert!(self.factored, "solve before factorize");
+        let par: Par = faer::get_global_parallelism();
+        let n = rhs.len();
+        let llt = LltRef::<'_, usize, f64>::new(&self.symbolic, &self.factor);
+        let req = self.symbolic.solve_in_place_scratch::<f64>(1, par);
+        let mut buf = MemBuffer::try_new(req).map_err(|_| LinearError::OutOfMemory)?;
+        let mat = MatMut::from_column_major_slice_mut(rhs, n, 1);
+        llt.solve_in_place_with_conj(Conj::No, mat, par, MemStack::new(&mut buf));
+        if rhs.iter().all(|v| v.is_finite()) {
+            Ok(())
+        } else {
+            Err(LinearError::NonFinite)
+        }
+    }
+}
+
+/// Result of a conjugate-gradient solve.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PcgInfo {
+    pub iterations: usize,
+    /// Final ‖b − A x‖ / ‖b‖.
+    pub relative_residual: f64,
+}
+
+/// Preconditioned conjugate gradients for A x = b from x = 0, with the
+/// preconditioner `m` (a Cholesky factor of an earlier matrix). Stops at
+/// ‖r‖ ≤ `tolerance`·‖b‖ or fails after `max_iterations`.
+pub fn pcg(
+    a: SymLower<'_>,
+    m: &Cholesky,
+    b: &[f64],
+    x: &mut [f64],
+    tolerance: f64,
+    max_iterations: usize,
+) -> Result<PcgInfo, LinearError> {
+    let n = b.len();
+    x.iter_mut().for_each(|v| *v = 0.0);
+    let bnorm = norm(b);
+    if bnorm == 0.0 {
+        return Ok(PcgInfo {
+            iterations: 0,
+            relative_residual: 0.0,
+        });
+    }
+    let mut r = b.to_vec();
+    let mut z = r.clone();
+    m.solve_in_place(&mut z)?;
+    let mut p = z.clone();
+    let mut rz = dot(&r, &z);
+    let mut ap = vec![0.0; n];
+    let mut rel = 1.0;
+    for it in 1..=max_iterations {
+        a.mul(&p, &mut ap);
+        let pap = dot(&p, &ap);
+        if !(pap > 0.0) {
+            // Indefinite current matrix (or breakdown): CG cannot continue.
+            return Err(if pap.is_finite() {
+                LinearError::NotPositiveDefinite { index: it }
+            } else {
+                LinearError::NonFinite
+            });
+        }
+        let alpha = rz / pap;
+        for i in 0..n {
+            x[i] += alpha * p[i];
+            r[i] -= alpha * ap[i];
+        }
+        rel = norm(&r) / bnorm;
+        if !rel.is_finite() {
+            return Err(LinearError::NonFinite);
+        }
+        if rel <= tolerance {
+            return Ok(PcgInfo {
+                iterations: it,
+                relative_residual: rel,
+            });
+        }
+        z.copy_from_slice(&r);
+        m.solve_in_place(&mut z)?;
+        let rz_new = dot(&r, &z);
+        let beta = rz_new / rz;
+        rz = rz_new;
+        for i in 0..n {
+            p[i] = z[i] + beta * p[i];
+        }
+    }
+    Err(LinearError::PcgNotConverged {
+        iterations: max_iterations,
+        tolerance,
+        reached: rel,
+    })
+}
+
+pub(crate) fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+pub(crate) fn norm(a: &[f64]) -> f64 {
+    dot(a, a).sqrt()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// 1D Laplacian chain with 3 DOFs per "node", lower CSC.
+    fn laplacian(nodes: usize, shift: f64) -> (Vec<usize>, Vec<usize>, Vec<f64>, Vec<usize>) {
+        let n = 3 * nodes;
+        let (mut cp, mut ri, mut v) = (vec![0], vec![], vec![]);
+        for j in 0..n {
+            ri.push(j);
+            v.push(2.0 + shift);
+            if j + 3 < n {
+                ri.push(j + 3);
+                v.push(-1.0);
+            }
+            cp.push(ri.len());
+        }
+        (cp, ri, v, (0..n).map(|i| i / 3).collect())
+    }
+
+    /// Both orderings solve an SPD system to round-off; PCG with the factor of
+    /// a nearby matrix converges on the current one.
+    #[test]
+    fn cholesky_and_pcg_solve_spd_systems() {
+        let (cp, ri, v, dn) = laplacian(40, 0.01);
+        let n = cp.len() - 1;
+        let b: Vec<f64> = (0..n).map(|i| (i as f64 * 0.37).sin()).collect();
+        for ord in [Ordering::Metis, Ordering::Amd] {
+            let mut c = Cholesky::new(&cp, &ri, ord, &dn).unwrap();
+            c.factorize(&v).unwrap();
+            let mut x = b.clone();
+            c.solve_in_place(&mut x).unwrap();
+            let mut ax = vec![0.0; n];
+            SymLower {
+                col_ptr: &cp,
+                row_idx: &ri,
+                values: &v,
+            }
+            .mul(&x, &mut ax);
+            let err: f64 = ax
+                .iter()
+                .zip(&b)
+                .map(|(p, q)| (p - q).abs())
+                .fold(0.0, f64::max);
+            assert!(err < 1e-10, "{ord:?}: {err}");
+        }
+        let mut c = Cholesky::new(&cp, &ri, Ordering::Metis, &dn).unwrap();
+        c.factorize(&v).unwrap();
+        let (_, _, v2, _) = laplacian(40, 0.05);
+        let a2 = SymLower {
+            col_ptr: &cp,
+            row_idx: &ri,
+            values: &v2,
+        };
+        let mut x = vec![0.0; n];
+        let info = pcg(a2, &c, &b, &mut x, 1e-10, 100).unwrap();
+        assert!(info.iterations > 1 && info.relative_residual <= 1e-10);
+        let mut neg = v.clone();
+        neg[0] = -5.0;
+        assert!(matches!(
+            c.factorize(&neg),
+            Err(LinearError::NotPositiveDefinite { .. })
+        ));
+    }
+}

@@ -1,0 +1,905 @@
+//! Quasi-static displacement-controlled solution (SPEC §2, §6): boundary
+//! conditions and measurements of the pull-out test, adaptive load stepping
+//! with Newton iterations, line search, cut-back, checkpoints and resume.
+//!
+//! The driver is written for any proportional Dirichlet loading
+//! ([`Dirichlet`]: value = base + λ·rate) with a [`Measurement`] of force and
+//! relative displacement; [`solve_pullout`] builds both from the pull-out
+//! model's node sets:
+//! * concrete bearing face (z = L): u_z = 0 on every node;
+//! * lateral rigid-body modes of the concrete: at the bearing-face node with
+//!   the smallest x (ties: smallest y) u_x = u_y = 0, at the bearing-face
+//!   node with the largest x u_y = 0 (removes x, y translation and rotation
+//!   about z; the three other modes are held by u_z = 0 on the face);
+//! * bar loaded end: u_z = λ (the imposed displacement), u_x = u_y = 0 (the
+//!   machine's grip; it also holds the bar's lateral modes once the
+//!   interface has lost its shear stiffness);
+//! * F = Σ of the internal forces f_z over the loaded-end nodes (the pull,
+//!   N); FED = mean u_z of `bar_free_end` − mean u_z of `concrete_free_face`
+//!   (the whole z = 0 concrete face as the mesh gives it, m);
+//!   σ_mb = F / (π d l_adh) (paper eq. 14, Pa).
+
+use crate::assembly::{AssemblyError, ElementLaws, EvalTimings, States, System};
+use crate::interface_element::INTERFACE_POINTS;
+use crate::laws::TangentKind;
+use crate::linear::{dot, norm, pcg, Cholesky, LinearError, SymLower};
+use crate::spec::solver::{LinearSolverKind, Loading, SolverSettings};
+use mesh::Model;
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+use std::time::Instant;
+
+/// Proportional Dirichlet conditions: u[dofs[i]] = base[i] + λ·rate[i].
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Dirichlet {
+    /// Global DOFs (3·node + component).
+    pub dofs: Vec<usize>,
+    /// Value at λ = 0, m.
+    pub base: Vec<f64>,
+    /// Value per unit λ (dimensionless: λ is a length, m).
+    pub rate: Vec<f64>,
+}
+
+impl Dirichlet {
+    /// Adds DOF `dof` with value `base + λ·rate`.
+    pub fn push(&mut self, dof: usize, base: f64, rate: f64) {
+        self.dofs.push(dof);
+        self.base.push(base);
+        self.rate.push(rate);
+    }
+    fn apply(&self, lambda: f64, u: &mut [f64]) {
+        for i in 0..self.dofs.len() {
+            u[self.dofs[i]] = self.base[i] + lambda * self.rate[i];
+        }
+    }
+}
+
+/// What is recorded per converged step.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Measurement {
+    /// Force = Σ f_int over these global DOFs, N.
+    pub force_dofs: Vec<usize>,
+    /// Relative displacement = mean u over `plus` − mean u over `minus`, m.
+    pub plus_dofs: Vec<usize>,
+    pub minus_dofs: Vec<usize>,
+    /// Stress = force · this factor (1/m²), e.g. 1/(π d l_adh).
+    pub stress_per_force: f64,
+}
+
+impl Measurement {
+    fn eval(&self, u: &[f64], f_int: &[f64]) -> (f64, f64, f64) {
+        let force: f64 = self.force_dofs.iter().map(|&d| f_int[d]).sum();
+        let mean = |ds: &[usize]| {
+            if ds.is_empty() {
+                0.0
+            } else {
+                ds.iter().map(|&d| u[d]).sum::<f64>() / ds.len() as f64
+            }
+        };
+        let rel = mean(&self.plus_dofs) - mean(&self.minus_dofs);
+        (force, rel, force * self.stress_per_force)
+    }
+}
+
+/// One row of `curve.csv` (SI).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct CurveRow {
+    pub step: usize,
+    /// Imposed displacement λ, m.
+    pub u_imposed: f64,
+    /// Reaction F, N.
+    pub force: f64,
+    /// Free-end displacement (relative displacement), m.
+    pub fed: f64,
+    /// Mean bond stress σ_mb, Pa.
+    pub bond_stress: f64,
+    /// Newton iterations of the converged attempt.
+    pub iterations: usize,
+}
+
+/// Wall times by phase, s.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct WallTimes {
+    pub total: f64,
+    /// Scatter into the global matrix and force vector.
+    pub assembly: f64,
+    /// Constitutive updates and element kernels.
+    pub constitutive: f64,
+    /// Numeric Cholesky factorisations (and the symbolic analysis).
+    pub factorisation: f64,
+    /// Triangular solves and conjugate gradients.
+    pub solve: f64,
+}
+
+impl WallTimes {
+    fn add(&mut self, o: &WallTimes) {
+        self.total += o.total;
+        self.assembly += o.assembly;
+        self.constitutive += o.constitutive;
+        self.factorisation += o.factorisation;
+        self.solve += o.solve;
+    }
+    fn add_eval(&mut self, e: &EvalTimings) {
+        self.assembly += e.assembly;
+        self.constitutive += e.constitutive;
+    }
+}
+
+/// Summary of a run (`summary.json`).
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+pub struct Summary {
+    /// Largest σ_mb, Pa.
+    pub peak_bond_stress: f64,
+    /// FED at the peak, m.
+    pub fed_at_peak: f64,
+    /// FED at the last converged step, m.
+    pub final_fed: f64,
+    pub steps: usize,
+    pub cutbacks: usize,
+    /// Free DOFs.
+    pub dofs: usize,
+    pub total_iterations: usize,
+    pub factorisations: usize,
+    pub pcg_iterations: usize,
+    pub wall_time_s: WallTimes,
+}
+
+/// Everything needed to restart from a converged step.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Checkpoint {
+    pub n_nodes: usize,
+    pub n_tets: usize,
+    pub n_interfaces: usize,
+    /// λ of the last converged step, m.
+    pub u_imposed: f64,
+    /// Size of the next step to try, m.
+    pub next_step: f64,
+    /// Global displacement, m.
+    pub u: Vec<f64>,
+    pub states: States,
+    pub rows: Vec<CurveRow>,
+    pub summary: Summary,
+}
+
+/// A checkpoint file that cannot be written or read.
+#[derive(Debug, thiserror::Error)]
+pub enum CheckpointError {
+    #[error("checkpoint {path}: {source}")]
+    Io {
+        path: String,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("checkpoint {path}: corrupt or of another version ({detail})")]
+    Corrupt { path: String, detail: String },
+}
+
+impl Checkpoint {
+    /// Writes atomically (temporary file then rename), bincode.
+    pub fn save(&self, path: &Path) -> Result<(), CheckpointError> {
+        let io = |source| CheckpointError::Io {
+            path: path.display().to_string(),
+            source,
+        };
+        let bytes = bincode::serialize(&(CHECKPOINT_MAGIC, self)).map_err(|e| {
+            CheckpointError::Corrupt {
+                path: path.display().to_string(),
+                detail: e.to_string(),
+            }
+        })?;
+        let tmp = path.with_extension("tmp");
+        std::fs::write(&tmp, bytes).map_err(io)?;
+        std::fs::rename(&tmp, path).map_err(io)
+    }
+
+    pub fn load(path: &Path) -> Result<Self, CheckpointError> {
+        let bytes = std::fs::read(path).map_err(|source| CheckpointError::Io {
+            path: path.display().to_string(),
+            source,
+        })?;
+        let (magic, cp): (u64, Checkpoint) =
+            bincode::deserialize(&bytes).map_err(|e| CheckpointError::Corrupt {
+                path: path.display().to_string(),
+                detail: e.to_string(),
+            })?;
+        if magic != CHECKPOINT_MAGIC {
+            return Err(CheckpointError::Corrupt {
+                path: path.display().to_string(),
+                detail: format!("format tag {magic:#x}"),
+            });
+        }
+        Ok(cp)
+    }
+}
+
+const CHECKPOINT_MAGIC: u64 = 0x7269_6262_6172_0001;
+
+/// A finished (or partial) run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RunResult {
+    pub rows: Vec<CurveRow>,
+    pub summary: Summary,
+    /// The last converged state (for fields and restarts).
+    pub last: Checkpoint,
+}
+
+/// Per converged step, for progress output.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StepReport {
+    pub row: CurveRow,
+    /// Step size of the converged attempt, m.
+    pub step_size: f64,
+    /// Wall times of this step (all attempts).
+    pub times: WallTimes,
+}
+
+/// A failed attempt that led to a smaller step.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Cutback {
+    /// Step number being attempted.
+    pub step: usize,
+    /// Imposed displacement of the failed attempt, m.
+    pub u_imposed: f64,
+    pub failed_step_size: f64,
+    pub next_step_size: f64,
+    pub reason: String,
+    /// ‖r‖/‖reaction‖ per iteration.
+    pub residual_history: Vec<f64>,
+}
+
+/// The converged state offered to observers.
+pub struct CommittedView<'a> {
+    pub model: &'a Model,
+    pub laws: &'a ElementLaws,
+    pub checkpoint: &'a dyn Fn() -> Checkpoint,
+    pub u: &'a [f64],
+    pub states: &'a States,
+}
+
+/// Receives progress; every method has a no-op default.
+pub trait Observer {
+    fn step_converged(&mut self, _report: &StepReport, _state: &CommittedView<'_>) {}
+    fn cutback(&mut self, _event: &Cutback) {}
+}
+
+/// An observer that ignores everything.
+pub struct Silent;
+impl Observer for Silent {}
+
+/// Why a run stopped early.
+#[derive(Debug, thiserror::Error)]
+pub enum SolveError {
+    #[error("model: {0}")]
+    Model(String),
+    #[error(transparent)]
+    Assembly(#[from] AssemblyError),
+    #[error("linear solver set-up: {0}")]
+    Linear(#[from] LinearError),
+    #[error("checkpoint does not match the model: {0}")]
+    Checkpoint(String),
+    #[error(
+        "step {step} did not converge at the minimum step size: imposed displacement {u_imposed:e} m \
+         (step {step_size:e} m); residual history {residual_history:?}; likely cause: {cause}; \
+         {} converged steps kept", partial.rows.len()
+    )]
+    Stalled {
+        step: usize,
+        u_imposed: f64,
+        step_size: f64,
+        residual_history: Vec<f64>,
+        cause: String,
+        partial: Box<RunResult>,
+    },
+}
+
+/// Boundary conditions and measurement of the pull-out test (see module doc).
+pub fn pullout_conditions(model: &Model) -> Result<(Dirichlet, Measurement), SolveError> {
+    let sets = &model.node_sets;
+    let need = |name: &str, v: &Vec<u32>| {
+        if v.is_empty() {
+            Err(SolveError::Model(format!("node set {name} is empty")))
+        } else if v.iter().any(|&n| n as usize >= model.nodes.len()) {
+            Err(SolveError::Model(format!(
+                "node set {name} references a missing node"
+            )))
+        } else {
+            Ok(())
+        }
+    };
+    need("bar_loaded_end", &sets.bar_loaded_end)?;
+    need("bar_free_end", &sets.bar_free_end)?;
+    need("concrete_bearing_face", &sets.concrete_bearing_face)?;
+    need("concrete_free_face", &sets.concrete_free_face)?;
+    if !(model.bar_diameter > 0.0 && model.adhesive_length > 0.0) {
+        return Err(SolveError::Model(format!(
+            "bar_diameter {} m and adhesive_length {} m must be > 0",
+            model.bar_diameter, model.adhesive_length
+        )));
+    }
+    let mut dir = Dirichlet::default();
+    let mut seen = vec![false; 3 * model.nodes.len()];
+    let mut fix = |dir: &mut Dirichlet, dof: usize, rate: f64| {
+        if !seen[dof] {
+            seen[dof] = true;
+            dir.push(dof, 0.0, rate);
+        }
+    };
+    for &n in &sets.bar_loaded_end {
+        let n = n as usize;
+        fix(&mut dir, 3 * n, 0.0);
+        fix(&mut dir, 3 * n + 1, 0.0);
+        fix(&mut dir, 3 * n + 2, 1.0);
+    }
+    for &n in &sets.concrete_bearing_face {
+        fix(&mut dir, 3 * n as usize + 2, 0.0);
+    }
+    let x = |n: &u32| model.nodes[*n as usize];
+    let a = sets
+        .concrete_bearing_face
+        .iter()
+        .min_by(|p, q| {
+            x(p)[0]
+                .total_cmp(&x(q)[0])
+                .then(x(p)[1].total_cmp(&x(q)[1]))
+        })
+        .copied()
+        .expect("checked non-empty");
+    let b = sets
+        .concrete_bearing_face
+        .iter()
+        .max_by(|p, q| x(p)[0].total_cmp(&x(q)[0]))
+        .copied()
+        .expect("checked non-empty");
+    if x(&b)[0] - x(&a)[0] <= 0.0 {
+        return Err(SolveError::Model(
+            "concrete_bearing_face has no extent in x: cannot remove the rotation about z".into(),
+        ));
+    }
+    fix(&mut dir, 3 * a as usize, 0.0);
+    fix(&mut dir, 3 * a as usize + 1, 0.0);
+    fix(&mut dir, 3 * b as usize + 1, 0.0);
+    let meas = Measurement {
+        force_dofs: sets
+            .bar_loaded_end
+            .iter()
+            .map(|&n| 3 * n as usize + 2)
+            .collect(),
+        plus_dofs: sets
+            .bar_free_end
+            .iter()
+            .map(|&n| 3 * n as usize + 2)
+            .collect(),
+        minus_dofs: sets
+            .concrete_free_face
+            .iter()
+            .map(|&n| 3 * n as usize + 2)
+            .collect(),
+        stress_per_force: 1.0 / (std::f64::consts::PI * model.bar_diameter * model.adhesive_length),
+    };
+    Ok((dir, meas))
+}
+
+/// Runs the pull-out test of SPEC §2 (see [`run`]).
+pub fn solve_pullout(
+    model: &Model,
+    laws: &ElementLaws,
+    loading: &Loading,
+    settings: &SolverSettings,
+    checkpoint: Option<Checkpoint>,
+    observer: &mut dyn Observer,
+) -> Result<RunResult, SolveError> {
+    let (dir, meas) = pullout_conditions(model)?;
+    run(
+        model, laws, &dir, &meas, loading, settings, checkpoint, observer,
+    )
+}
+
+/// Outcome of one Newton attempt.
+struct Attempt {
+    iterations: usize,
+    history: Vec<f64>,
+    failure: Option<String>,
+}
+
+/// Linear-algebra state reused across iterations and steps.
+struct LinearState {
+    chol: Cholesky,
+    /// The factor is of an older matrix (PCG mode).
+    factorisations: usize,
+    pcg_iterations: usize,
+}
+
+/// Displacement-controlled run: λ from the checkpoint's value (or 0) to
+/// `loading.u_final` (or until the measured relative displacement reaches
+/// `loading.fed_stop`), adaptive steps, Newton with line search.
+#[allow(clippy::too_many_arguments)]
+pub fn run(
+    model: &Model,
+    laws: &ElementLaws,
+    dirichlet: &Dirichlet,
+    measurement: &Measurement,
+    loading: &Loading,
+    settings: &SolverSettings,
+    checkpoint: Option<Checkpoint>,
+    observer: &mut dyn Observer,
+) -> Result<RunResult, SolveError> {
+    let t_start = Instant::now();
+    if laws.tets.len() != model.tets.len() || laws.interfaces.len() != model.interfaces.len() {
+        return Err(SolveError::Model(format!(
+            "{} tet laws for {} tets, {} interface laws for {} interface elements",
+            laws.tets.len(),
+            model.tets.len(),
+            laws.interfaces.len(),
+            model.interfaces.len()
+        )));
+    }
+    let active: Vec<bool> = laws.interfaces.iter().map(|l| l.is_some()).collect();
+    let mut wall = WallTimes::default();
+    let system = System::new(model, &dirichlet.dofs, &active)?;
+    let dofs = system.dofs();
+    let n_total = dofs.n_total();
+    let n_free = dofs.n_free();
+    let mut dof_node = vec![0usize; n_free];
+    for d in 0..n_total {
+        if let Some(f) = dofs.free_index(d) {
+            dof_node[f] = d / 3;
+        }
+    }
+    let t = Instant::now();
+    let chol = Cholesky::new(
+        &system.col_ptr,
+        &system.row_idx,
+        settings.ordering,
+        &dof_node,
+    )?;
+    wall.factorisation += t.elapsed().as_secs_f64();
+    let mut lin = LinearState {
+        chol,
+        factorisations: 0,
+        pcg_iterations: 0,
+    };
+
+    let (mut u, mut committed, mut rows, mut summary, mut lambda, mut h) = match checkpoint {
+        Some(cp) => {
+            if cp.n_nodes != model.nodes.len()
+                || cp.n_tets != model.tets.len()
+                || cp.n_interfaces != model.interfaces.len()
+                || cp.u.len() != n_total
+                || cp.states.bulk.len() != model.tets.len()
+                || cp.states.interface.len() != INTERFACE_POINTS * model.interfaces.len()
+            {
+                return Err(SolveError::Checkpoint(format!(
+                    "checkpoint has {} nodes, {} tets, {} interface elements; model has {}, {}, {}",
+                    cp.n_nodes,
+                    cp.n_tets,
+                    cp.n_interfaces,
+                    model.nodes.len(),
+                    model.tets.len(),
+                    model.interfaces.len()
+                )));
+            }
+            (
+                cp.u,
+                cp.states,
+                cp.rows,
+                cp.summary,
+                cp.u_imposed,
+                cp.next_step,
+            )
+        }
+        None => (
+            vec![0.0; n_total],
+            States::initial(model),
+            Vec::new(),
+            Summary {
+                dofs: n_free,
+                ..Summary::default()
+            },
+            0.0,
+            loading.initial_step,
+        ),
+    };
+    let previous_wall = summary.wall_time_s;
+    summary.wall_time_s = WallTimes::default();
+    let mut trial = committed.clone();
+    let mut f_int = vec![0.0; n_total];
+    let mut values = vec![0.0; system.nnz()];
+    let done_eps = 1e-9 * loading.u_final;
+
+    let make_cp =
+        |u: &[f64], states: &States, rows: &[CurveRow], summary: &Summary, lambda: f64, h: f64| {
+            Checkpoint {
+                n_nodes: model.nodes.len(),
+                n_tets: model.tets.len(),
+                n_interfaces: model.interfaces.len(),
+                u_imposed: lambda,
+                next_step: h,
+                u: u.to_vec(),
+                states: states.clone(),
+                rows: rows.to_vec(),
+                summary: summary.clone(),
+            }
+        };
+    let finish = |summary: &mut Summary, wall: &WallTimes, lin: &LinearState| {
+        let mut w = previous_wall;
+        let mut now = *wall;
+        now.total = t_start.elapsed().as_secs_f64();
+        w.add(&now);
+        summary.wall_time_s = w;
+        let _ = lin;
+    };
+
+    loop {
+        let fed_done = loading
+            .fed_stop
+            .is_some_and(|s| rows.last().is_some_and(|r: &CurveRow| r.fed >= s));
+        if lambda >= loading.u_final - done_eps || fed_done {
+            break;
+        }
+        let step = rows.len() + 1;
+        let h_try = h.min(loading.u_final - lambda);
+        let target = lambda + h_try;
+        let mut step_wall = WallTimes::default();
+        let t_step = Instant::now();
+        let mut u_trial = u.clone();
+        dirichlet.apply(target, &mut u_trial);
+        let attempt = newton(
+            &system,
+            laws,
+            settings,
+            &committed,
+            &mut trial,
+            &mut u_trial,
+            &mut f_int,
+            &mut values,
+            &mut lin,
+            &mut step_wall,
+        );
+        step_wall.total = t_step.elapsed().as_secs_f64();
+        wall.add(&step_wall);
+        summary.total_iterations += attempt.iterations;
+        summary.factorisations = lin.factorisations;
+        summary.pcg_iterations = lin.pcg_iterations;
+        match attempt.failure {
+            None => {
+                u = u_trial;
+                std::mem::swap(&mut committed, &mut trial);
+                lambda = target;
+                let (force, fed, bond) = measurement.eval(&u, &f_int);
+                let row = CurveRow {
+                    step,
+                    u_imposed: lambda,
+                    force,
+                    fed,
+                    bond_stress: bond,
+                    iterations: attempt.iterations,
+                };
+                rows.push(row);
+                summary.steps = rows.len();
+                if bond > summary.peak_bond_stress || rows.len() == 1 {
+                    summary.peak_bond_stress = bond;
+                    summary.fed_at_peak = fed;
+                }
+                summary.final_fed = fed;
+                if attempt.iterations <= loading.easy_iterations {
+                    h = (h_try * loading.growth).min(loading.max_step).max(h);
+                } else {
+                    h = h_try;
+                }
+                finish(&mut summary, &wall, &lin);
+                let cp = || make_cp(&u, &committed, &rows, &summary, lambda, h);
+                let view = CommittedView {
+                    model,
+                    laws,
+                    checkpoint: &cp,
+                    u: &u,
+                    states: &committed,
+                };
+                observer.step_converged(
+                    &StepReport {
+                        row,
+                        step_size: h_try,
+                        times: step_wall,
+                    },
+                    &view,
+                );
+                trial.clone_from(&committed);
+            }
+            Some(reason) => {
+                summary.cutbacks += 1;
+                let next = h_try * loading.cutback;
+                trial.clone_from(&committed);
+                observer.cutback(&Cutback {
+                    step,
+                    u_imposed: target,
+                    failed_step_size: h_try,
+                    next_step_size: next,
+                    reason: reason.clone(),
+                    residual_history: attempt.history.clone(),
+                });
+                if h_try <= loading.min_step * (1.0 + 1e-12) {
+                    finish(&mut summary, &wall, &lin);
+                    let last = make_cp(&u, &committed, &rows, &summary, lambda, h_try);
+                    return Err(SolveError::Stalled {
+                        step,
+                        u_imposed: target,
+                        step_size: h_try,
+                        residual_history: attempt.history,
+                        cause: reason,
+                        partial: Box::new(RunResult {
+                            rows,
+                            summary,
+                            last,
+                        }),
+                    });
+                }
+                h = next.max(loading.min_step);
+            }
+        }
+    }
+    finish(&mut summary, &wall, &lin);
+    let last = make_cp(&u, &committed, &rows, &summary, lambda, h);
+    Ok(RunResult {
+        rows,
+        summary,
+        last,
+    })
+}
+
+/// Damage growth during a failed attempt, as a hint of the likely cause.
+fn diagnose(committed: &States, trial: &States) -> String {
+    let grew = |a: f64, b: f64| b > a + 1e-12;
+    let iface = committed
+        .interface
+        .iter()
+        .zip(&trial.interface)
+        .filter(|(c, t)| grew(c.damage, t.damage))
+        .count();
+    let bulk = committed
+        .bulk
+        .iter()
+        .zip(&trial.bulk)
+        .filter(|(c, t)| grew(c.damage, t.damage))
+        .count();
+    let plastic = committed
+        .bulk
+        .iter()
+        .zip(&trial.bulk)
+        .filter(|(c, t)| c.plastic_strain != t.plastic_strain)
+        .count();
+    let slip = committed
+        .interface
+        .iter()
+        .zip(&trial.interface)
+        .filter(|(c, t)| c.slip != t.slip)
+        .count();
+    format!(
+        "in the last iterate, interface damage grew at {iface} node pairs and frictional slip changed at {slip}; \
+         concrete damage grew in {bulk} tets; steel yielded in {plastic} tets (softening or sticking/sliding switches)"
+    )
+}
+
+/// Newton iterations at fixed Dirichlet values (already in `u`).
+#[allow(clippy::too_many_arguments)]
+fn newton(
+    system: &System,
+    laws: &ElementLaws,
+    settings: &SolverSettings,
+    committed: &States,
+    trial: &mut States,
+    u: &mut [f64],
+    f_int: &mut [f64],
+    values: &mut [f64],
+    lin: &mut LinearState,
+    wall: &mut WallTimes,
+) -> Attempt {
+    let dofs = system.dofs();
+    let n_free = dofs.n_free();
+    let mut history = Vec::new();
+    let mut r = vec![0.0; n_free];
+    let mut du = vec![0.0; n_free];
+    let mut energy0 = 0.0;
+    let mut last_energy = f64::INFINITY;
+    let fail = |history: Vec<f64>, iterations, why: String| Attempt {
+        iterations,
+        history,
+        failure: Some(why),
+    };
+    // Correction of the previous iteration (for the line search).
+    let mut prev: Option<(Vec<f64>, f64)> = None;
+    let mut first_norm = 0.0;
+    for k in 0..=settings.max_iterations {
+        let mut eval =
+            |u: &[f64], trial: &mut States, f_int: &mut [f64], values: &mut [f64], kind| {
+                let res = system.evaluate(laws, u, committed, trial, kind, f_int, Some(values));
+                match res {
+                    Ok(t) => {
+                        wall.add_eval(&t);
+                        Ok(())
+                    }
+                    Err(e) => Err(e.to_string()),
+                }
+            };
+        if let Err(why) = eval(u, trial, f_int, values, settings.tangent) {
+            return fail(history, k, format!("constitutive failure: {why}"));
+        }
+        residual(dofs, f_int, &mut r);
+        // Line search: if the full correction overshot the energy minimum
+        // along its direction, go back to the secant root.
+        if let (true, Some((d, g0))) = (settings.line_search, prev.as_ref()) {
+            let mut s = 1.0;
+            let mut g = dot(d, &r);
+            let mut tries = 0;
+            while g < 0.0 && g.abs() > 0.5 * g0 && tries < 4 {
+                let s_new = (s * g0 / (g0 - g)).clamp(0.1 * s, 0.9 * s);
+                dofs.scatter_add(d, s_new - s, u);
+                s = s_new;
+                if let Err(why) = eval(u, trial, f_int, values, settings.tangent) {
+                    return fail(
+                        history,
+                        k,
+                        format!("constitutive failure in line search: {why}"),
+                    );
+                }
+                residual(dofs, f_int, &mut r);
+                g = dot(d, &r);
+                tries += 1;
+            }
+            last_energy *= s;
+        }
+        let reaction = reaction_norm(system, f_int);
+        let rnorm = norm(&r);
+        if !rnorm.is_finite() {
+            return fail(history, k, "non-finite residual".into());
+        }
+        let scale = if reaction > 0.0 { reaction } else { 1.0 };
+        history.push(rnorm / scale);
+        if k == 0 {
+            first_norm = rnorm;
+        }
+        if k > 0
+            && rnorm <= settings.residual_tolerance * scale
+            && last_energy <= settings.energy_tolerance * energy0
+        {
+            return Attempt {
+                iterations: k,
+                history,
+                failure: None,
+            };
+        }
+        if k == settings.max_iterations {
+            break;
+        }
+        if rnorm > 1e8 * first_norm.max(scale) {
+            return fail(
+                history,
+                k,
+                format!(
+                    "diverging: residual {rnorm:e} N. {}",
+                    diagnose(committed, trial)
+                ),
+            );
+        }
+        // Solve K du = r.
+        if let Err(e) = solve_correction(
+            system, laws, settings, committed, trial, u, f_int, values, &r, &mut du, lin, wall,
+        ) {
+            return fail(
+                history,
+                k,
+                format!("linear solve: {e}. {}", diagnose(committed, trial)),
+            );
+        }
+        let g0 = dot(&du, &r);
+        if !g0.is_finite() {
+            return fail(history, k, "non-finite correction".into());
+        }
+        if k == 0 {
+            energy0 = g0.abs();
+            if energy0 == 0.0 {
+                return Attempt {
+                    iterations: 1,
+                    history,
+                    failure: None,
+                };
+            }
+        }
+        last_energy = g0.abs();
+        dofs.scatter_add(&du, 1.0, u);
+        prev = Some((du.clone(), g0));
+    }
+    let why = format!(
+        "no convergence in {} iterations (last relative residual {:e}). {}",
+        settings.max_iterations,
+        history.last().copied().unwrap_or(f64::NAN),
+        diagnose(committed, trial)
+    );
+    fail(history, settings.max_iterations, why)
+}
+
+/// r = −f_int on the free DOFs (no external loads besides the Dirichlet values).
+fn residual(dofs: &crate::assembly::DofMap, f_int: &[f64], r: &mut [f64]) {
+    dofs.gather(f_int, r);
+    r.iter_mut().for_each(|v| *v = -*v);
+}
+
+/// ‖f_int‖ over the constrained DOFs: the reactions, the force scale.
+fn reaction_norm(system: &System, f_int: &[f64]) -> f64 {
+    let dofs = system.dofs();
+    (0..dofs.n_total())
+        .filter(|&d| dofs.free_index(d).is_none())
+        .map(|d| f_int[d] * f_int[d])
+        .sum::<f64>()
+        .sqrt()
+}
+
+/// Solves for the Newton correction with the configured linear solver; a
+/// consistent tangent that is not positive definite (softening) is replaced
+/// by the secant matrix at the same iterate.
+#[allow(clippy::too_many_arguments)]
+fn solve_correction(
+    system: &System,
+    laws: &ElementLaws,
+    settings: &SolverSettings,
+    committed: &States,
+    trial: &mut States,
+    u: &[f64],
+    f_int: &mut [f64],
+    values: &mut [f64],
+    r: &[f64],
+    du: &mut [f64],
+    lin: &mut LinearState,
+    wall: &mut WallTimes,
+) -> Result<(), LinearError> {
+    if settings.linear_solver == LinearSolverKind::Pcg && lin.chol.is_factored() {
+        let t = Instant::now();
+        let mat = SymLower {
+            col_ptr: &system.col_ptr,
+            row_idx: &system.row_idx,
+            values,
+        };
+        let res = pcg(
+            mat,
+            &lin.chol,
+            r,
+            du,
+            settings.pcg_tolerance,
+            settings.pcg_max_iterations,
+        );
+        wall.solve += t.elapsed().as_secs_f64();
+        if let Ok(info) = res {
+            lin.pcg_iterations += info.iterations;
+            return Ok(());
+        }
+    }
+    let t = Instant::now();
+    let mut res = lin.chol.factorize(values);
+    wall.factorisation += t.elapsed().as_secs_f64();
+    lin.factorisations += 1;
+    if matches!(res, Err(LinearError::NotPositiveDefinite { .. }))
+        && settings.tangent == TangentKind::Consistent
+    {
+        let e = system
+            .evaluate(
+                laws,
+                u,
+                committed,
+                trial,
+                TangentKind::Secant,
+                f_int,
+                Some(values),
+            )
+            .map_err(|_| LinearError::NonFinite)?;
+        wall.add_eval(&e);
+        let t = Instant::now();
+        res = lin.chol.factorize(values);
+        wall.factorisation += t.elapsed().as_secs_f64();
+        lin.factorisations += 1;
+    }
+    res?;
+    let t = Instant::now();
+    du.copy_from_slice(r);
+    let out = lin.chol.solve_in_place(du);
+    wall.solve += t.elapsed().as_secs_f64();
+    out
+}

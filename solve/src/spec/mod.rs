@@ -1,0 +1,3 @@
+//! Scene spec sections read by the solver: raw (as written) and resolved (SI).
+
+pub mod solver;

@@ -1,0 +1,310 @@
+//! The scene's `loading` and `solver` sections: raw (as written, with units)
+//! and resolved (SI, validated, defaults filled).
+//!
+//! ```
+//! use solve::spec::solver::{RawLoading, RawSolver};
+//! let l: RawLoading = serde_yaml::from_str("u_final: 0.5 mm\ninitial_step: 2 um").unwrap();
+//! let l = l.resolve().unwrap();
+//! assert!((l.u_final - 0.5e-3).abs() < 1e-15);
+//! let s: RawSolver = serde_yaml::from_str("linear_solver: pcg").unwrap();
+//! assert_eq!(s.resolve().unwrap().max_iterations, 25);
+//! ```
+
+use crate::laws::TangentKind;
+use crate::linear::Ordering;
+use geom::units::{Dim, RawQuantity, UnitError};
+use serde::{Deserialize, Serialize};
+
+/// A `loading` or `solver` value that cannot be used.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum SolverSpecError {
+    #[error(transparent)]
+    Unit(#[from] UnitError),
+    #[error("{key}: {value} is out of range ({bound})")]
+    OutOfRange {
+        key: String,
+        value: f64,
+        bound: &'static str,
+    },
+}
+
+/// `loading` as written.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawLoading {
+    pub u_final: Option<RawQuantity>,
+    pub fed_stop: Option<RawQuantity>,
+    pub initial_step: Option<RawQuantity>,
+    pub min_step: Option<RawQuantity>,
+    pub max_step: Option<RawQuantity>,
+    pub growth: Option<f64>,
+    pub cutback: Option<f64>,
+    pub easy_iterations: Option<usize>,
+}
+
+/// Displacement-controlled loading, SI.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Loading {
+    /// Final imposed displacement of the bar's loaded end, m.
+    pub u_final: f64,
+    /// Stop once the free-end displacement reaches this value, m.
+    pub fed_stop: Option<f64>,
+    /// First step size, m.
+    pub initial_step: f64,
+    /// Smallest step size; a step failing at this size ends the run, m.
+    pub min_step: f64,
+    /// Largest step size, m.
+    pub max_step: f64,
+    /// Step growth factor after an easy step (> 1).
+    pub growth: f64,
+    /// Step reduction factor on non-convergence (in (0, 1)).
+    pub cutback: f64,
+    /// A converged step with at most this many iterations is easy.
+    pub easy_iterations: usize,
+}
+
+impl Default for Loading {
+    fn default() -> Self {
+        Self {
+            u_final: 1e-3,
+            fed_stop: None,
+            initial_step: 5e-6,
+            min_step: 1e-9,
+            max_step: 2e-5,
+            growth: 1.5,
+            cutback: 0.5,
+            easy_iterations: 5,
+        }
+    }
+}
+
+fn positive(key: &str, v: f64) -> Result<f64, SolverSpecError> {
+    if v > 0.0 {
+        Ok(v)
+    } else {
+        Err(SolverSpecError::OutOfRange {
+            key: key.into(),
+            value: v,
+            bound: "must be > 0",
+        })
+    }
+}
+
+fn length(q: &Option<RawQuantity>, key: &str, default: f64) -> Result<f64, SolverSpecError> {
+    match q {
+        Some(q) => positive(key, q.to_si(Dim::Length, key)?),
+        None => Ok(default),
+    }
+}
+
+impl RawLoading {
+    pub fn resolve(&self) -> Result<Loading, SolverSpecError> {
+        let d = Loading::default();
+        let l = Loading {
+            u_final: length(&self.u_final, "loading.u_final", d.u_final)?,
+            fed_stop: match &self.fed_stop {
+                Some(q) => Some(positive(
+                    "loading.fed_stop",
+                    q.to_si(Dim::Length, "loading.fed_stop")?,
+                )?),
+                None => None,
+            },
+            initial_step: length(&self.initial_step, "loading.initial_step", d.initial_step)?,
+            min_step: length(&self.min_step, "loading.min_step", d.min_step)?,
+            max_step: length(&self.max_step, "loading.max_step", d.max_step)?,
+            growth: self.growth.unwrap_or(d.growth),
+            cutback: self.cutback.unwrap_or(d.cutback),
+            easy_iterations: self.easy_iterations.unwrap_or(d.easy_iterations),
+        };
+        let bad = |key: &str, value: f64, bound| {
+            Err(SolverSpecError::OutOfRange {
+                key: key.into(),
+                value,
+                bound,
+            })
+        };
+        if !(l.growth >= 1.0 && l.growth.is_finite()) {
+            return bad("loading.growth", l.growth, "must be ≥ 1");
+        }
+        if !(l.cutback > 0.0 && l.cutback < 1.0) {
+            return bad("loading.cutback", l.cutback, "must be in (0, 1)");
+        }
+        if l.min_step > l.initial_step {
+            return bad(
+                "loading.min_step",
+                l.min_step,
+                "must be ≤ loading.initial_step",
+            );
+        }
+        if l.initial_step > l.max_step {
+            return bad(
+                "loading.initial_step",
+                l.initial_step,
+                "must be ≤ loading.max_step",
+            );
+        }
+        Ok(l)
+    }
+}
+
+/// Linear solver of the Newton corrections.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum LinearSolverKind {
+    /// Sparse Cholesky of every new matrix.
+    #[default]
+    Cholesky,
+    /// Conjugate gradients preconditioned by a reused Cholesky factor.
+    Pcg,
+}
+
+/// `solver` as written.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawSolver {
+    pub residual_tolerance: Option<f64>,
+    pub energy_tolerance: Option<f64>,
+    pub max_iterations: Option<usize>,
+    pub tangent: Option<TangentKind>,
+    pub line_search: Option<bool>,
+    pub linear_solver: Option<LinearSolverKind>,
+    pub ordering: Option<Ordering>,
+    pub pcg_tolerance: Option<f64>,
+    pub pcg_max_iterations: Option<usize>,
+}
+
+/// Newton settings, resolved.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct SolverSettings {
+    /// ‖residual‖ ≤ tol · ‖reaction‖ (relative force criterion).
+    pub residual_tolerance: f64,
+    /// |Δu · r| ≤ tol · |Δu₁ · r₀| (energy criterion, relative to the step's first iteration).
+    pub energy_tolerance: f64,
+    /// Newton iterations per attempt before a cut-back.
+    pub max_iterations: usize,
+    /// Tangent used in the Newton matrix.
+    pub tangent: TangentKind,
+    /// Backtracking line search on the energy along the correction.
+    pub line_search: bool,
+    pub linear_solver: LinearSolverKind,
+    pub ordering: Ordering,
+    /// PCG relative residual tolerance.
+    pub pcg_tolerance: f64,
+    /// PCG iterations before the preconditioner is refactorised.
+    pub pcg_max_iterations: usize,
+}
+
+impl Default for SolverSettings {
+    fn default() -> Self {
+        Self {
+            residual_tolerance: 1e-4,
+            energy_tolerance: 1e-8,
+            max_iterations: 25,
+            tangent: TangentKind::Consistent,
+            line_search: true,
+            linear_solver: LinearSolverKind::Cholesky,
+            ordering: Ordering::Metis,
+            pcg_tolerance: 1e-8,
+            pcg_max_iterations: 60,
+        }
+    }
+}
+
+impl RawSolver {
+    pub fn resolve(&self) -> Result<SolverSettings, SolverSpecError> {
+        let d = SolverSettings::default();
+        let unit = |key: &str, v: Option<f64>, dv: f64| -> Result<f64, SolverSpecError> {
+            let v = v.unwrap_or(dv);
+            if v > 0.0 && v < 1.0 {
+                Ok(v)
+            } else {
+                Err(SolverSpecError::OutOfRange {
+                    key: key.into(),
+                    value: v,
+                    bound: "must be in (0, 1)",
+                })
+            }
+        };
+        let count = |key: &str, v: Option<usize>, dv: usize| -> Result<usize, SolverSpecError> {
+            let v = v.unwrap_or(dv);
+            if v >= 1 {
+                Ok(v)
+            } else {
+                Err(SolverSpecError::OutOfRange {
+                    key: key.into(),
+                    value: v as f64,
+                    bound: "must be ≥ 1",
+                })
+            }
+        };
+        Ok(SolverSettings {
+            residual_tolerance: unit(
+                "solver.residual_tolerance",
+                self.residual_tolerance,
+                d.residual_tolerance,
+            )?,
+            energy_tolerance: unit(
+                "solver.energy_tolerance",
+                self.energy_tolerance,
+                d.energy_tolerance,
+            )?,
+            max_iterations: count(
+                "solver.max_iterations",
+                self.max_iterations,
+                d.max_iterations,
+            )?,
+            tangent: self.tangent.unwrap_or(d.tangent),
+            line_search: self.line_search.unwrap_or(d.line_search),
+            linear_solver: self.linear_solver.unwrap_or(d.linear_solver),
+            ordering: self.ordering.unwrap_or(d.ordering),
+            pcg_tolerance: unit("solver.pcg_tolerance", self.pcg_tolerance, d.pcg_tolerance)?,
+            pcg_max_iterations: count(
+                "solver.pcg_max_iterations",
+                self.pcg_max_iterations,
+                d.pcg_max_iterations,
+            )?,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn unknown_key_and_bad_values_are_named() {
+        let e = serde_yaml::from_str::<RawLoading>("u_finall: 1 mm").unwrap_err();
+        assert!(e.to_string().contains("u_finall"), "{e}");
+        let l: RawLoading = serde_yaml::from_str("u_final: 1 MPa").unwrap();
+        assert!(l
+            .resolve()
+            .unwrap_err()
+            .to_string()
+            .contains("loading.u_final"));
+        let l: RawLoading = serde_yaml::from_str("cutback: 1.5").unwrap();
+        assert!(l
+            .resolve()
+            .unwrap_err()
+            .to_string()
+            .contains("loading.cutback"));
+        let s: RawSolver = serde_yaml::from_str("residual_tolerance: 0").unwrap();
+        assert!(s
+            .resolve()
+            .unwrap_err()
+            .to_string()
+            .contains("solver.residual_tolerance"));
+        let s: RawSolver = serde_yaml::from_str("tangent: secant\nordering: amd").unwrap();
+        let s = s.resolve().unwrap();
+        assert_eq!(
+            (s.tangent, s.ordering),
+            (TangentKind::Secant, Ordering::Amd)
+        );
+    }
+
+    #[test]
+    fn defaults_are_documented_values() {
+        let l = RawLoading::default().resolve().unwrap();
+        assert_eq!(l, Loading::default());
+        assert_eq!(l.u_final, 1e-3);
+    }
+}

@@ -1,0 +1,719 @@
+//! Verification of the element kernels, assembly and the nonlinear driver on
+//! synthetic models built in code.
+
+use mesh::{Frame, InterfaceElement, InterfaceZone, Model, Region};
+use nalgebra::Vector3;
+use solve::assembly::{ElementLaws, SharedBulkLaw, SharedInterfaceLaw, States, System};
+use solve::laws::elastic::{ElasticInterface, LinearElastic};
+use solve::laws::fczm::{Fczm, DEFAULT_GAMMA};
+use solve::laws::tvergaard::Tvergaard;
+use solve::laws::{InterfaceLaw, InterfaceState, TangentKind};
+use solve::linear::Ordering;
+use solve::pullout::{
+    run, solve_pullout, CommittedView, Dirichlet, Measurement, Observer, Silent, SolveError,
+    StepReport,
+};
+use solve::spec::solver::{LinearSolverKind, Loading, SolverSettings};
+use std::sync::Arc;
+
+/// A structured block of hexahedra, each split into 6 positive tets.
+/// Returns (first node index, node index grid accessor dims).
+struct Block {
+    first: usize,
+    n: [usize; 3],
+}
+impl Block {
+    fn node(&self, i: usize, j: usize, k: usize) -> u32 {
+        (self.first + i + (self.n[0] + 1) * (j + (self.n[1] + 1) * k)) as u32
+    }
+}
+
+fn add_block(m: &mut Model, xs: &[f64], ys: &[f64], zs: &[f64], region: Region) -> Block {
+    let b = Block {
+        first: m.nodes.len(),
+        n: [xs.len() - 1, ys.len() - 1, zs.len() - 1],
+    };
+    for &z in zs {
+        for &y in ys {
+            for &x in xs {
+                m.nodes.push([x, y, z]);
+                m.node_region.push(region);
+            }
+        }
+    }
+    for k in 0..b.n[2] {
+        for j in 0..b.n[1] {
+            for i in 0..b.n[0] {
+                let c = |a: usize, bb: usize, cc: usize| b.node(i + a, j + bb, k + cc);
+                let v = [
+                    c(0, 0, 0),
+                    c(1, 0, 0),
+                    c(1, 1, 0),
+                    c(0, 1, 0),
+                    c(0, 0, 1),
+                    c(1, 0, 1),
+                    c(1, 1, 1),
+                    c(0, 1, 1),
+                ];
+                // Kuhn split along the diagonal 0–6: conforming between cells.
+                for path in [[1, 2], [2, 3], [3, 7], [7, 4], [4, 5], [5, 1]] {
+                    let mut t = [v[0], v[path[0]], v[path[1]], v[6]];
+                    let x = |n: u32| m.nodes[n as usize];
+                    let e = |a: u32| {
+                        let (p, q) = (x(a), x(t[0]));
+                        [p[0] - q[0], p[1] - q[1], p[2] - q[2]]
+                    };
+                    let (e1, e2, e3) = (e(t[1]), e(t[2]), e(t[3]));
+                    let det = e1[0] * (e2[1] * e3[2] - e2[2] * e3[1])
+                        - e1[1] * (e2[0] * e3[2] - e2[2] * e3[0])
+                        + e1[2] * (e2[0] * e3[1] - e2[1] * e3[0]);
+                    if det < 0.0 {
+                        t.swap(1, 2);
+                    }
+                    m.tets.push(t);
+                    m.tet_region.push(region);
+                    m.tet_size
+                        .push(solve::element::characteristic_size(det.abs() / 6.0));
+                }
+            }
+        }
+    }
+    b
+}
+
+fn lin(a: f64, b: f64, n: usize) -> Vec<f64> {
+    (0..=n).map(|i| a + (b - a) * i as f64 / n as f64).collect()
+}
+
+fn tri_area(m: &Model, n: [u32; 3]) -> f64 {
+    let x = |i: usize| m.nodes[n[i] as usize];
+    let e1 = [x(1)[0] - x(0)[0], x(1)[1] - x(0)[1], x(1)[2] - x(0)[2]];
+    let e2 = [x(2)[0] - x(0)[0], x(2)[1] - x(0)[1], x(2)[2] - x(0)[2]];
+    let c = [
+        e1[1] * e2[2] - e1[2] * e2[1],
+        e1[2] * e2[0] - e1[0] * e2[2],
+        e1[0] * e2[1] - e1[1] * e2[0],
+    ];
+    0.5 * (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt()
+}
+
+/// Interface elements on the plane shared by two blocks: for every quad of
+/// the face, two triangles (steel nodes `s`, concrete twins `c`).
+fn join(m: &mut Model, quads: Vec<([u32; 4], [u32; 4], InterfaceZone)>, frame: Frame) {
+    for (s, c, zone) in quads {
+        for tri in [[0, 1, 2], [0, 2, 3]] {
+            let sn = tri.map(|i| s[i]);
+            let cn = tri.map(|i| c[i]);
+            let area = tri_area(m, sn);
+            m.interfaces.push(InterfaceElement {
+                nodes: [sn[0], sn[1], sn[2], cn[0], cn[1], cn[2]],
+                zone,
+                frame,
+                area,
+            });
+        }
+    }
+}
+
+/// Synthetic pull-out: a steel slab x ∈ [0, a] over z ∈ [−e, L + e] beside
+/// a concrete slab x ∈ [a, b] over z ∈ [0, L], bonded on x = a for z < l_adh.
+fn slab_pullout(nz: usize) -> Model {
+    let (a, b, w, l, e) = (4e-3, 12e-3, 4e-3, 16e-3, 2e-3);
+    let mut m = Model::default();
+    let mut zs = vec![-e];
+    zs.extend(lin(0.0, l, nz));
+    zs.push(l + e);
+    let steel = add_block(&mut m, &lin(0.0, a, 1), &lin(0.0, w, 1), &zs, Region::Steel);
+    let conc = add_block(
+        &mut m,
+        &lin(a, b, 2),
+        &lin(0.0, w, 1),
+        &lin(0.0, l, nz),
+        Region::Concrete,
+    );
+    let l_adh = l / 2.0;
+    let mut quads = Vec::new();
+    for k in 0..nz {
+        let zone = if zs[k + 1] + 1e-12 < l_adh {
+            InterfaceZone::Adhesive
+        } else {
+            InterfaceZone::Free
+        };
+        let s = [
+            steel.node(1, 0, k + 1),
+            steel.node(1, 1, k + 1),
+            steel.node(1, 1, k + 2),
+            steel.node(1, 0, k + 2),
+        ];
+        let c = [
+            conc.node(0, 0, k),
+            conc.node(0, 1, k),
+            conc.node(0, 1, k + 1),
+            conc.node(0, 0, k + 1),
+        ];
+        quads.push((s, c, zone));
+    }
+    join(
+        &mut m,
+        quads,
+        Frame {
+            n: [1.0, 0.0, 0.0],
+            t: [0.0, 0.0, 1.0],
+            h: [0.0, -1.0, 0.0],
+        },
+    );
+    let kz = steel.n[2];
+    for j in 0..=1 {
+        for i in 0..=1 {
+            m.node_sets.bar_loaded_end.push(steel.node(i, j, kz));
+            m.node_sets.bar_free_end.push(steel.node(i, j, 0));
+        }
+        for i in 0..=2 {
+            m.node_sets.concrete_bearing_face.push(conc.node(i, j, nz));
+            m.node_sets.concrete_free_face.push(conc.node(i, j, 0));
+        }
+    }
+    m.bar_diameter = w / std::f64::consts::PI; // so that π d l_adh = w l_adh, the bonded area
+    m.adhesive_length = l_adh;
+    m
+}
+
+fn elastic(e: f64, nu: f64) -> SharedBulkLaw {
+    Arc::new(LinearElastic {
+        young_modulus: e,
+        poisson_ratio: nu,
+    })
+}
+
+fn fczm_table2() -> Fczm {
+    Fczm {
+        tensile_strength: 3e6,
+        fracture_energy: 300.0,
+        lambda0: 2e-5,
+        delta_s: 1.0,
+        friction: 0.4,
+        zeta: 1.0,
+        gamma: DEFAULT_GAMMA,
+        min_damage: 0.0,
+    }
+}
+
+/// A uniform strain field is reproduced exactly on an unstructured tet mesh
+/// (patch test, SPEC §6 / issue 5): interior nodes are moved at random, the
+/// boundary gets u = ε·x, and every tet's strain equals ε.
+#[test]
+fn patch_test_uniform_strain_on_perturbed_mesh() {
+    let mut m = Model::default();
+    add_block(
+        &mut m,
+        &lin(0.0, 1.0, 3),
+        &lin(0.0, 1.0, 3),
+        &lin(0.0, 1.0, 3),
+        Region::Concrete,
+    );
+    let interior = |p: [f64; 3]| p.iter().all(|&c| c > 1e-9 && c < 1.0 - 1e-9);
+    let mut seed = 12345u64;
+    let mut rnd = || {
+        seed = seed
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((seed >> 33) as f64 / (1u64 << 31) as f64) - 0.5
+    };
+    for p in m.nodes.iter_mut() {
+        if interior(*p) {
+            for c in p.iter_mut() {
+                *c += 0.15 * rnd();
+            }
+        }
+    }
+    let eps = [1e-4, -3e-5, 2e-5, 4e-5, -1e-5, 3e-5]; // Voigt, engineering shear
+    let ux = |p: [f64; 3]| {
+        [
+            eps[0] * p[0] + 0.5 * eps[3] * p[1] + 0.5 * eps[5] * p[2],
+            0.5 * eps[3] * p[0] + eps[1] * p[1] + 0.5 * eps[4] * p[2],
+            0.5 * eps[5] * p[0] + 0.5 * eps[4] * p[1] + eps[2] * p[2],
+        ]
+    };
+    let mut dir = Dirichlet::default();
+    for (n, p) in m.nodes.iter().enumerate() {
+        if !interior(*p) {
+            let v = ux(*p);
+            for c in 0..3 {
+                dir.push(3 * n + c, v[c], 0.0);
+            }
+        }
+    }
+    let laws = ElementLaws {
+        tets: vec![elastic(30e9, 0.2); m.tets.len()],
+        interfaces: vec![],
+    };
+    let meas = Measurement {
+        force_dofs: vec![0],
+        stress_per_force: 1.0,
+        ..Default::default()
+    };
+    let loading = Loading {
+        u_final: 1.0,
+        initial_step: 1.0,
+        max_step: 1.0,
+        min_step: 0.5,
+        ..Loading::default()
+    };
+    let res = run(
+        &m,
+        &laws,
+        &dir,
+        &meas,
+        &loading,
+        &SolverSettings::default(),
+        None,
+        &mut Silent,
+    )
+    .unwrap();
+    let u = &res.last.u;
+    for (n, p) in m.nodes.iter().enumerate() {
+        let v = ux(*p);
+        for c in 0..3 {
+            assert!(
+                (u[3 * n + c] - v[c]).abs() < 1e-9 * 1e-4,
+                "node {n} comp {c}"
+            );
+        }
+    }
+    let sys = System::new(&m, &dir.dofs, &[]).unwrap();
+    for (t, g) in m.tets.iter().zip(sys.tet_geometry()) {
+        let ue: [f64; 12] = std::array::from_fn(|i| u[3 * t[i / 3] as usize + i % 3]);
+        let s = g.strain(&ue);
+        for c in 0..6 {
+            assert!((s[c] - eps[c]).abs() < 1e-9 * 1e-4, "{s}");
+        }
+    }
+}
+
+/// The assembled tangent equals the central finite difference of the
+/// assembled internal force with a nonlinear (softening) interface law
+/// (STYLE §4; consistency of the Newton matrix, SPEC §6).
+#[test]
+fn assembled_tangent_matches_finite_differences() {
+    let m = slab_pullout(4);
+    let tv: SharedInterfaceLaw = Arc::new(Tvergaard {
+        tensile_strength: 3e6,
+        fracture_energy: 100.0,
+        lambda0: 2e-6,
+        delta_s: 1.0,
+    });
+    let laws = ElementLaws::by_region(
+        &m,
+        elastic(30e9, 0.2),
+        elastic(200e9, 0.3),
+        tv.clone(),
+        Some(tv),
+    );
+    let sys = System::new(&m, &[], &vec![true; m.interfaces.len()]).unwrap();
+    let n = 3 * m.nodes.len();
+    // A displacement with the steel side sliding and opening past λ_0.
+    let mut u = vec![0.0; n];
+    for (i, r) in m.node_region.iter().enumerate() {
+        if *r == Region::Steel {
+            u[3 * i] = -1.5e-6 * (1.0 + 0.1 * (i % 3) as f64);
+            u[3 * i + 2] = 3e-6 + 1e-7 * (i % 5) as f64;
+        }
+    }
+    let committed = States::initial(&m);
+    let mut trial = committed.clone();
+    let mut f0 = vec![0.0; n];
+    let mut k = vec![0.0; sys.nnz()];
+    sys.evaluate(
+        &laws,
+        &u,
+        &committed,
+        &mut trial,
+        TangentKind::Consistent,
+        &mut f0,
+        Some(&mut k),
+    )
+    .unwrap();
+    let damaged = trial.interface.iter().filter(|s| s.damage > 0.0).count();
+    assert!(damaged > 0, "the check must cover the softening regime");
+    let h = 1e-11;
+    let mut worst: f64 = 0.0;
+    let kmax = k.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+    for j in (0..n).step_by(5) {
+        let mut up = u.clone();
+        let mut um = u.clone();
+        up[j] += h;
+        um[j] -= h;
+        let (mut fp, mut fm) = (vec![0.0; n], vec![0.0; n]);
+        sys.evaluate(
+            &laws,
+            &up,
+            &committed,
+            &mut trial,
+            TangentKind::Consistent,
+            &mut fp,
+            None,
+        )
+        .unwrap();
+        sys.evaluate(
+            &laws,
+            &um,
+            &committed,
+            &mut trial,
+            TangentKind::Consistent,
+            &mut fm,
+            None,
+        )
+        .unwrap();
+        for i in j..n {
+            let fd = (fp[i] - fm[i]) / (2.0 * h);
+            let col = &sys.row_idx[sys.col_ptr[j]..sys.col_ptr[j + 1]];
+            let kij = col
+                .binary_search(&i)
+                .map(|p| k[sys.col_ptr[j] + p])
+                .unwrap_or(0.0);
+            worst = worst.max((fd - kij).abs());
+        }
+    }
+    assert!(
+        worst < 1e-5 * kmax,
+        "max |K − FD| = {worst:e}, max |K| = {kmax:e}"
+    );
+}
+
+/// Two 1 mm steel blocks joined by one 1 mm × 1 mm interface (paper Fig. 8)
+/// opened or sheared by an imposed displacement of the top face.
+fn fig8(law: SharedInterfaceLaw) -> (Model, ElementLaws, Block, Block) {
+    let mut m = Model::default();
+    let s = 1e-3;
+    let bottom = add_block(
+        &mut m,
+        &lin(0.0, s, 1),
+        &lin(0.0, s, 1),
+        &lin(0.0, s, 1),
+        Region::Steel,
+    );
+    let top = add_block(
+        &mut m,
+        &lin(0.0, s, 1),
+        &lin(0.0, s, 1),
+        &lin(s, 2.0 * s, 1),
+        Region::Concrete,
+    );
+    let q = |b: &Block, k| {
+        [
+            b.node(0, 0, k),
+            b.node(1, 0, k),
+            b.node(1, 1, k),
+            b.node(0, 1, k),
+        ]
+    };
+    join(
+        &mut m,
+        vec![(q(&bottom, 1), q(&top, 0), InterfaceZone::Adhesive)],
+        Frame {
+            n: [0.0, 0.0, 1.0],
+            t: [1.0, 0.0, 0.0],
+            h: [0.0, 1.0, 0.0],
+        },
+    );
+    // Nearly rigid blocks so that the imposed displacement is the jump.
+    let laws = ElementLaws {
+        tets: vec![elastic(1e16, 0.0); m.tets.len()],
+        interfaces: vec![Some(law); 2],
+    };
+    (m, laws, bottom, top)
+}
+
+fn fig8_run(law: SharedInterfaceLaw, comp: usize, u_final: f64) -> Vec<(f64, f64)> {
+    let (m, laws, bottom, top) = fig8(law);
+    let mut dir = Dirichlet::default();
+    let mut meas = Measurement {
+        stress_per_force: 1.0 / 1e-6,
+        ..Default::default()
+    };
+    for j in 0..=1 {
+        for i in 0..=1 {
+            let b = bottom.node(i, j, 0) as usize;
+            for c in 0..3 {
+                dir.push(3 * b + c, 0.0, 0.0);
+            }
+            let t = top.node(i, j, 1) as usize;
+            for c in 0..3 {
+                dir.push(3 * t + c, 0.0, if c == comp { 1.0 } else { 0.0 });
+            }
+            meas.force_dofs.push(3 * t + comp);
+            meas.plus_dofs.push(3 * top.node(i, j, 0) as usize + comp);
+            meas.minus_dofs
+                .push(3 * bottom.node(i, j, 1) as usize + comp);
+        }
+    }
+    let loading = Loading {
+        u_final,
+        initial_step: u_final / 60.0,
+        max_step: u_final / 60.0,
+        min_step: u_final * 1e-7,
+        ..Loading::default()
+    };
+    let res = run(
+        &m,
+        &laws,
+        &dir,
+        &meas,
+        &loading,
+        &SolverSettings::default(),
+        None,
+        &mut Silent,
+    )
+    .unwrap();
+    res.rows.iter().map(|r| (r.fed, r.bond_stress)).collect()
+}
+
+/// The law's direct response along a monotonic jump path in component `comp`.
+fn direct(law: &dyn InterfaceLaw, comp: usize, jumps: &[f64]) -> Vec<f64> {
+    let mut st = InterfaceState::default();
+    jumps
+        .iter()
+        .map(|&j| {
+            let mut v = Vector3::zeros();
+            v[comp] = j;
+            let r = law.step(&st, &v, TangentKind::Consistent).unwrap();
+            st = r.state;
+            r.traction[comp]
+        })
+        .collect()
+}
+
+fn assert_matches(curve: &[(f64, f64)], law: &dyn InterfaceLaw, comp: usize, sign: f64) {
+    let jumps: Vec<f64> = curve.iter().map(|c| sign * c.0).collect();
+    let expect = direct(law, comp, &jumps);
+    let peak = expect.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+    for ((_, got), want) in curve.iter().zip(&expect) {
+        assert!(
+            (sign * got - want).abs() <= 5e-3 * peak,
+            "got {got:e}, want {want:e}"
+        );
+    }
+}
+
+/// One interface element between two blocks (paper Fig. 8): force per area
+/// against the jump equals the interface law's own response within 0.5 %,
+/// first with the elastic law (SPEC §6, paper §3.2).
+#[test]
+fn one_element_model_elastic_law() {
+    let law = ElasticInterface {
+        normal_stiffness: 1.5e11,
+        shear_stiffness: 1.5e11,
+    };
+    let curve = fig8_run(Arc::new(law), 2, 1e-5);
+    assert!(curve.len() >= 10);
+    assert_matches(&curve, &law, 0, 1.0);
+}
+
+/// Same model with the FCZM of Table 2 in pure tension (through softening)
+/// and pure shear: the element reproduces the law within 0.5 % (paper Fig. 9).
+#[test]
+fn one_element_model_fczm_table2() {
+    let law = fczm_table2();
+    let tension = fig8_run(Arc::new(law), 2, 2e-4);
+    assert!(tension.iter().any(|c| c.1 > 2.9e6), "peak reached");
+    assert!(tension.last().unwrap().1 < 1.5e6, "softening reached");
+    assert_matches(&tension, &law, 0, 1.0);
+    let shear = fig8_run(Arc::new(law), 0, 2e-4);
+    assert_matches(&shear, &law, 1, 1.0);
+}
+
+fn pullout_laws(m: &Model) -> ElementLaws {
+    let f = Fczm {
+        tensile_strength: 2.16e6,
+        fracture_energy: 97.0,
+        lambda0: 5e-5,
+        delta_s: 0.16,
+        friction: 0.3,
+        zeta: 8.0,
+        gamma: DEFAULT_GAMMA,
+        min_damage: 0.0,
+    };
+    ElementLaws::by_region(
+        m,
+        elastic(30e9, 0.2),
+        elastic(200e9, 0.3),
+        Arc::new(f),
+        None,
+    )
+}
+
+/// A small synthetic pull-out runs to the final displacement with rise, peak
+/// and a non-zero frictional plateau (SPEC §2, §6).
+#[test]
+fn synthetic_pullout_runs_to_the_end() {
+    let m = slab_pullout(8);
+    let loading = Loading {
+        u_final: 4e-4,
+        initial_step: 1e-5,
+        max_step: 2e-5,
+        ..Loading::default()
+    };
+    let res = solve_pullout(
+        &m,
+        &pullout_laws(&m),
+        &loading,
+        &SolverSettings::default(),
+        None,
+        &mut Silent,
+    )
+    .unwrap();
+    let last = res.rows.last().unwrap();
+    assert!((last.u_imposed - 4e-4).abs() < 1e-12);
+    let s = &res.summary;
+    assert!(s.peak_bond_stress > 0.0 && last.bond_stress < s.peak_bond_stress);
+    assert!(res
+        .rows
+        .iter()
+        .all(|r| r.force.is_finite() && r.fed.is_finite()));
+    assert!(last.fed > s.fed_at_peak);
+}
+
+/// Resuming from a checkpoint of step k gives the same curve as the
+/// uninterrupted run (SPEC §6: runs can be resumed from the last converged step).
+#[test]
+fn resume_equals_uninterrupted() {
+    let m = slab_pullout(6);
+    let laws = pullout_laws(&m);
+    let loading = Loading {
+        u_final: 2e-4,
+        initial_step: 1e-5,
+        max_step: 2e-5,
+        ..Loading::default()
+    };
+    let settings = SolverSettings::default();
+    let full = solve_pullout(&m, &laws, &loading, &settings, None, &mut Silent).unwrap();
+    struct Grab(usize, Option<solve::pullout::Checkpoint>);
+    impl Observer for Grab {
+        fn step_converged(&mut self, r: &StepReport, v: &CommittedView<'_>) {
+            if r.row.step == self.0 {
+                self.1 = Some((v.checkpoint)());
+            }
+        }
+    }
+    let mut grab = Grab(4, None);
+    solve_pullout(
+        &m,
+        &laws,
+        &Loading {
+            u_final: 2e-4,
+            ..loading
+        },
+        &settings,
+        None,
+        &mut grab,
+    )
+    .unwrap();
+    let dir = std::env::temp_dir().join(format!("ribbar-resume-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("state.bin");
+    grab.1.unwrap().save(&path).unwrap();
+    let cp = solve::pullout::Checkpoint::load(&path).unwrap();
+    let resumed = solve_pullout(&m, &laws, &loading, &settings, Some(cp), &mut Silent).unwrap();
+    std::fs::remove_dir_all(&dir).ok();
+    assert_eq!(full.rows.len(), resumed.rows.len());
+    for (a, b) in full.rows.iter().zip(&resumed.rows) {
+        assert_eq!(a.step, b.step);
+        assert!((a.u_imposed - b.u_imposed).abs() <= 1e-15);
+        assert!(
+            (a.force - b.force).abs() <= 1e-9 * a.force.abs().max(1e-6),
+            "{a:?} vs {b:?}"
+        );
+    }
+}
+
+/// PCG with a reused factorisation gives the same curve as Cholesky on every
+/// iteration, with fewer factorisations (SPEC §9: reuse factorisations).
+#[test]
+fn pcg_reuse_matches_cholesky() {
+    let m = slab_pullout(6);
+    let laws = pullout_laws(&m);
+    let loading = Loading {
+        u_final: 1.5e-4,
+        initial_step: 1e-5,
+        max_step: 2e-5,
+        ..Loading::default()
+    };
+    let chol = solve_pullout(
+        &m,
+        &laws,
+        &loading,
+        &SolverSettings {
+            ordering: Ordering::Amd,
+            ..SolverSettings::default()
+        },
+        None,
+        &mut Silent,
+    )
+    .unwrap();
+    let pcg = solve_pullout(
+        &m,
+        &laws,
+        &loading,
+        &SolverSettings {
+            linear_solver: LinearSolverKind::Pcg,
+            ..SolverSettings::default()
+        },
+        None,
+        &mut Silent,
+    )
+    .unwrap();
+    assert!(pcg.summary.factorisations < chol.summary.factorisations);
+    let peak = chol.summary.peak_bond_stress;
+    assert!((pcg.summary.peak_bond_stress - peak).abs() < 1e-3 * peak);
+}
+
+/// A step that cannot converge at the minimum step size ends with a typed
+/// error naming the step and imposed displacement, and keeps every converged
+/// step (SPEC §6, §8).
+#[test]
+fn diverging_case_keeps_converged_steps() {
+    let m = slab_pullout(4);
+    let laws = pullout_laws(&m);
+    let loading = Loading {
+        u_final: 2e-4,
+        initial_step: 1e-5,
+        max_step: 1e-5,
+        min_step: 2.5e-6,
+        ..Loading::default()
+    };
+    // Two Newton iterations cannot follow the interface's damage evolution.
+    let settings = SolverSettings {
+        max_iterations: 2,
+        residual_tolerance: 1e-10,
+        energy_tolerance: 1e-16,
+        ..SolverSettings::default()
+    };
+    match solve_pullout(&m, &laws, &loading, &settings, None, &mut Silent) {
+        Err(SolveError::Stalled {
+            step,
+            u_imposed,
+            residual_history,
+            partial,
+            ..
+        }) => {
+            assert_eq!(step, partial.rows.len() + 1);
+            assert!(u_imposed > partial.last.u_imposed);
+            assert!(!residual_history.is_empty());
+            assert!(partial.summary.cutbacks >= 2);
+            let msg = SolveError::Stalled {
+                step,
+                u_imposed,
+                step_size: 0.0,
+                residual_history,
+                cause: "x".into(),
+                partial,
+            }
+            .to_string();
+            assert!(msg.contains(&format!("step {step}")), "{msg}");
+        }
+        other => panic!(
+            "expected a stalled run, got {:?}",
+            other.map(|r| r.rows.len())
+        ),
+    }
+}
