@@ -77,7 +77,11 @@ impl Dim {
                 ("N/mm", 1e3),
                 ("kN/m", 1e3),
             ],
-            Dim::Angle => &[("rad", 1.0), ("deg", std::f64::consts::PI / 180.0), ("°", std::f64::consts::PI / 180.0)],
+            Dim::Angle => &[
+                ("rad", 1.0),
+                ("deg", std::f64::consts::PI / 180.0),
+                ("°", std::f64::consts::PI / 180.0),
+            ],
             Dim::StiffnessPerArea => &[
                 ("N/m3", 1.0),
                 ("N/m^3", 1.0),
@@ -174,6 +178,10 @@ fn parse_with_unit(text: &str, dim: Dim, key: &str) -> Result<f64, UnitError> {
         })?;
     let number: f64 = trimmed[..split].trim().parse().expect("checked above");
     let unit = trimmed[split..].trim();
+    // A quoted bare number is SI, like an unquoted one.
+    if unit.is_empty() {
+        return Ok(number);
+    }
     dim.units()
         .iter()
         .find(|(name, _)| *name == unit)
@@ -208,7 +216,10 @@ mod tests {
         assert!((si("-1 MPa", Dim::Stress).unwrap() + 1e6).abs() < 1e-9);
         assert!((si("2.0e-5 m", Dim::Length).unwrap() - 2e-5).abs() < 1e-20);
         assert!((si("4e10", Dim::StiffnessPerArea).unwrap() - 4e10).abs() < 1e-3);
-        assert_eq!(RawQuantity::Number(0.25).to_si(Dim::Length, "k").unwrap(), 0.25);
+        assert_eq!(
+            RawQuantity::Number(0.25).to_si(Dim::Length, "k").unwrap(),
+            0.25
+        );
     }
 
     #[test]
@@ -217,13 +228,22 @@ mod tests {
             .to_si(Dim::Length, "bar.diameter")
             .unwrap_err();
         let msg = err.to_string();
-        assert!(msg.contains("bar.diameter") && msg.contains("MPa") && msg.contains("length"), "{msg}");
+        assert!(
+            msg.contains("bar.diameter") && msg.contains("MPa") && msg.contains("length"),
+            "{msg}"
+        );
     }
 
     #[test]
     fn malformed_and_non_finite_are_errors() {
-        assert!(matches!(si("mm 8", Dim::Length), Err(UnitError::Malformed { .. })));
-        assert!(matches!(si("", Dim::Length), Err(UnitError::Malformed { .. })));
+        assert!(matches!(
+            si("mm 8", Dim::Length),
+            Err(UnitError::Malformed { .. })
+        ));
+        assert!(matches!(
+            si("", Dim::Length),
+            Err(UnitError::Malformed { .. })
+        ));
         assert!(matches!(
             RawQuantity::Number(f64::NAN).to_si(Dim::Length, "k"),
             Err(UnitError::NotFinite { .. })

@@ -1,0 +1,325 @@
+//! The geometry stage: `specimen.geo` + `geometry.json`, with the solid built
+//! by gmsh and measured three ways (analytic, parry3d, gmsh OCC).
+
+use crate::geo::{groups, write_geo};
+use crate::gmsh::{Gmsh, GmshError};
+use crate::layout::Layout;
+use crate::metrics::{analytic, tessellated, Metrics};
+use crate::spec::{Bar, Specimen};
+use serde::Serialize;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::time::Duration;
+
+/// Relative agreement required between the three measurements.
+pub const CHECK_TOLERANCE: f64 = 0.01;
+/// Time allowed for gmsh to build and measure the solid.
+pub const GMSH_TIMEOUT: Duration = Duration::from_secs(600);
+
+/// One quantity measured three ways.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Check {
+    pub analytic: f64,
+    pub parry3d: f64,
+    pub gmsh_occ: f64,
+    /// Largest |x − analytic| / |analytic| over the two numerical values.
+    pub max_rel_diff: f64,
+    /// `max_rel_diff` ≤ 1 %.
+    pub agree: bool,
+}
+
+impl Check {
+    fn new(analytic: f64, parry3d: f64, gmsh_occ: f64) -> Check {
+        let scale = analytic.abs().max(f64::MIN_POSITIVE);
+        let max_rel_diff =
+            ((parry3d - analytic).abs() / scale).max((gmsh_occ - analytic).abs() / scale);
+        Check {
+            analytic,
+            parry3d,
+            gmsh_occ,
+            max_rel_diff,
+            agree: max_rel_diff <= CHECK_TOLERANCE,
+        }
+    }
+}
+
+/// Everything `geometry.json` holds.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct GeometryReport {
+    #[serde(rename = "f_R")]
+    pub f_r: f64,
+    pub rib_volume_m3: f64,
+    pub bar_volume_m3: f64,
+    pub interface_area_adhesive_m2: f64,
+    pub interface_area_free_m2: f64,
+    pub rib_count: usize,
+    /// rib_volume_m3 (ribbed bars only), bar_volume_m3, interface areas.
+    pub checks: BTreeMap<String, Check>,
+    /// Smallest axial distance from the planes z = 0, l_adh, L to a rib edge feature, m.
+    pub plane_clearance_m: Option<f64>,
+    /// Smallest axial distance from the bar end planes to a rib edge feature, m.
+    pub end_clearance_m: Option<f64>,
+    /// Entities per physical group in the built model.
+    pub group_entities: BTreeMap<String, usize>,
+    /// Triangles of the parry3d tessellation.
+    pub tessellation_triangles: usize,
+    pub gmsh_version: String,
+    /// Wall time gmsh took to build and measure the solid, s.
+    pub gmsh_build_seconds: f64,
+    pub bar: Bar,
+    pub specimen: Specimen,
+}
+
+/// Why the geometry stage failed.
+#[derive(Debug, thiserror::Error)]
+pub enum GeomError {
+    #[error(transparent)]
+    Gmsh(#[from] GmshError),
+    #[error("{path}: {source}", path = .path.display())]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("gmsh could not build the specimen from {path}:\n{message}", path = .path.display())]
+    Build { path: PathBuf, message: String },
+    #[error("gmsh's measurement output is unreadable ({problem}): {text}")]
+    Measure { problem: String, text: String },
+    #[error("physical group {group:?} is empty in the built model{hint}")]
+    EmptyGroup { group: String, hint: String },
+    #[error("the built model has {curves} curve(s) and {surfaces} surface(s) not bounding anything (leftover construction entities)")]
+    Leftovers { curves: usize, surfaces: usize },
+    #[error("{quantity}: analytic {analytic:.6e}, parry3d {parry3d:.6e}, gmsh OCC {gmsh_occ:.6e} differ by {pct:.2} % (> 1 %)")]
+    Disagree {
+        quantity: String,
+        analytic: f64,
+        parry3d: f64,
+        gmsh_occ: f64,
+        pct: f64,
+    },
+}
+
+const MEASURE_PY: &str = r#"
+import json, sys
+import gmsh
+geo, out = sys.argv[1], sys.argv[2]
+gmsh.initialize(["-noenv"], interruptible=False)
+gmsh.option.setNumber("General.Terminal", 0)
+gmsh.logger.start()
+res = {"errors": [], "groups": {}}
+try:
+    gmsh.open(geo)
+except Exception as e:
+    res["errors"].append(str(e))
+res["errors"] += [m for m in gmsh.logger.get() if m.startswith("Error")]
+if not res["errors"]:
+    for dim, tag in gmsh.model.getPhysicalGroups():
+        name = gmsh.model.getPhysicalName(dim, tag)
+        ents = gmsh.model.getEntitiesForPhysicalGroup(dim, tag)
+        res["groups"][name] = {"count": len(ents),
+                               "mass": sum(gmsh.model.occ.getMass(dim, int(e)) for e in ents)}
+    bounded = set(abs(t) for _, t in gmsh.model.getBoundary(gmsh.model.getEntities(2), combined=False, oriented=False))
+    res["free_curves"] = len([t for _, t in gmsh.model.getEntities(1) if t not in bounded])
+    bounded = set(abs(t) for _, t in gmsh.model.getBoundary(gmsh.model.getEntities(3), combined=False, oriented=False))
+    res["free_surfaces"] = len([t for _, t in gmsh.model.getEntities(2) if t not in bounded])
+with open(out, "w") as f:
+    json.dump(res, f)
+gmsh.finalize()
+"#;
+
+#[derive(serde::Deserialize)]
+struct Measured {
+    errors: Vec<String>,
+    groups: BTreeMap<String, Group>,
+    #[serde(default)]
+    free_curves: usize,
+    #[serde(default)]
+    free_surfaces: usize,
+}
+
+#[derive(serde::Deserialize)]
+struct Group {
+    count: usize,
+    mass: f64,
+}
+
+/// Writes `path` atomically: a temporary file in the same directory, renamed.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), GeomError> {
+    let io = |source| GeomError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let tmp = path.with_extension(format!("tmp{}", std::process::id()));
+    std::fs::write(&tmp, bytes).map_err(io)?;
+    std::fs::rename(&tmp, path).map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
+        io(e)
+    })
+}
+
+/// Analytic and parry3d metrics, no gmsh: what a parameter sweep can afford
+/// for every combination.
+pub fn offline_metrics(bar: &Bar, specimen: &Specimen) -> (Metrics, crate::metrics::Tessellated) {
+    let layout = Layout::new(bar, specimen);
+    let m = analytic(&layout);
+    let t = tessellated(&layout, &[(0.0, layout.l_adh), (layout.l_adh, layout.l)]);
+    (m, t)
+}
+
+/// Runs the geometry stage into `out_dir` (created if needed): writes
+/// `specimen.geo`, has gmsh build and measure it, then writes
+/// `geometry.json`. Fails if gmsh fails or the checks disagree by > 1 %;
+/// `geometry.json` is then not written.
+pub fn build_geometry(
+    bar: &Bar,
+    specimen: &Specimen,
+    gmsh: &Gmsh,
+    out_dir: &Path,
+) -> Result<GeometryReport, GeomError> {
+    std::fs::create_dir_all(out_dir).map_err(|source| GeomError::Io {
+        path: out_dir.to_path_buf(),
+        source,
+    })?;
+    let layout = Layout::new(bar, specimen);
+    // An old report beside a new script would look like a finished stage.
+    let json_path = out_dir.join("geometry.json");
+    if json_path.exists() {
+        std::fs::remove_file(&json_path).map_err(|source| GeomError::Io {
+            path: json_path.clone(),
+            source,
+        })?;
+    }
+    let geo_path = out_dir.join("specimen.geo");
+    write_atomic(&geo_path, write_geo(&layout).as_bytes())?;
+
+    let m = analytic(&layout);
+    let tess = tessellated(&layout, &[(0.0, layout.l_adh), (layout.l_adh, layout.l)]);
+
+    let measure_out = out_dir.join(format!(".occ-measure-{}.json", std::process::id()));
+    let run = gmsh.run_python(
+        MEASURE_PY,
+        &[geo_path.as_os_str(), measure_out.as_os_str()],
+        out_dir,
+        GMSH_TIMEOUT,
+    );
+    let run = match run {
+        Ok(o) => o,
+        Err(GmshError::Failed { stderr, .. }) => {
+            let _ = std::fs::remove_file(&measure_out);
+            return Err(GeomError::Build {
+                path: geo_path,
+                message: stderr,
+            });
+        }
+        Err(e) => return Err(e.into()),
+    };
+    let text = std::fs::read_to_string(&measure_out).map_err(|source| GeomError::Io {
+        path: measure_out.clone(),
+        source,
+    })?;
+    let _ = std::fs::remove_file(&measure_out);
+    let measured: Measured = serde_json::from_str(&text).map_err(|e| GeomError::Measure {
+        problem: e.to_string(),
+        text: crate::gmsh::tail(&text, 5),
+    })?;
+    if !measured.errors.is_empty() {
+        return Err(GeomError::Build {
+            path: geo_path,
+            message: measured.errors.join("\n"),
+        });
+    }
+    let group_mass = |name: &str| measured.groups.get(name).map_or(0.0, |g| g.mass);
+    let mut group_entities = BTreeMap::new();
+    for name in [
+        groups::STEEL,
+        groups::CONCRETE,
+        groups::INTERFACE_ADHESIVE,
+        groups::INTERFACE_FREE,
+        groups::BAR_LOADED_END,
+        groups::BAR_FREE_END,
+        groups::CONCRETE_BEARING_FACE,
+        groups::CONCRETE_FREE_FACE,
+    ] {
+        let count = measured.groups.get(name).map_or(0, |g| g.count);
+        let may_be_empty = name == groups::INTERFACE_FREE && layout.l_adh >= layout.l;
+        if count == 0 && !may_be_empty {
+            return Err(GeomError::EmptyGroup {
+                group: name.into(),
+                hint: format!(" (see {})", geo_path.display()),
+            });
+        }
+        group_entities.insert(name.to_string(), count);
+    }
+    if measured.free_curves > 0 || measured.free_surfaces > 0 {
+        return Err(GeomError::Leftovers {
+            curves: measured.free_curves,
+            surfaces: measured.free_surfaces,
+        });
+    }
+
+    let core = std::f64::consts::PI * layout.r * layout.r * (layout.z_hi - layout.z_lo);
+    let steel = group_mass(groups::STEEL);
+    let mut checks = BTreeMap::new();
+    checks.insert(
+        "bar_volume_m3".to_string(),
+        Check::new(m.bar_volume_m3, tess.bar_volume_m3, steel),
+    );
+    if layout.ribs.is_some() {
+        checks.insert(
+            "rib_volume_m3".to_string(),
+            Check::new(m.rib_volume_m3, tess.bar_volume_m3 - core, steel - core),
+        );
+    }
+    checks.insert(
+        "interface_area_adhesive_m2".to_string(),
+        Check::new(
+            m.interface_area_adhesive_m2,
+            tess.slab_areas_m2[0],
+            group_mass(groups::INTERFACE_ADHESIVE),
+        ),
+    );
+    if layout.l_adh < layout.l {
+        checks.insert(
+            "interface_area_free_m2".to_string(),
+            Check::new(
+                m.interface_area_free_m2,
+                tess.slab_areas_m2[1],
+                group_mass(groups::INTERFACE_FREE),
+            ),
+        );
+    }
+    for (name, c) in &checks {
+        if !c.agree {
+            return Err(GeomError::Disagree {
+                quantity: name.clone(),
+                analytic: c.analytic,
+                parry3d: c.parry3d,
+                gmsh_occ: c.gmsh_occ,
+                pct: 100.0 * c.max_rel_diff,
+            });
+        }
+    }
+    let report = GeometryReport {
+        f_r: m.f_r,
+        rib_volume_m3: m.rib_volume_m3,
+        bar_volume_m3: m.bar_volume_m3,
+        interface_area_adhesive_m2: m.interface_area_adhesive_m2,
+        interface_area_free_m2: m.interface_area_free_m2,
+        rib_count: m.rib_count,
+        checks,
+        plane_clearance_m: layout.ribs.as_ref().map(|r| r.clearance_cube),
+        end_clearance_m: layout.ribs.as_ref().map(|r| r.clearance_ends),
+        group_entities,
+        tessellation_triangles: tess.triangles,
+        gmsh_version: gmsh.version().to_string(),
+        gmsh_build_seconds: run.elapsed.as_secs_f64(),
+        bar: bar.clone(),
+        specimen: specimen.clone(),
+    };
+    let json = serde_json::to_vec_pretty(&report).map_err(|e| GeomError::Measure {
+        problem: e.to_string(),
+        text: String::new(),
+    })?;
+    write_atomic(&json_path, &json)?;
+    Ok(report)
+}

@@ -1,0 +1,269 @@
+//! The gmsh `.geo` script (OpenCASCADE factory) that builds the specimen.
+//!
+//! Construction (SPEC §3, §9): core cylinder; two longitudinal ribs as
+//! extruded trapezoids whose base chord dips into the core; each transverse
+//! rib a `ThruSections` through [`RIB_SECTIONS`] trapezoids in planes through
+//! the bar axis (their base also dips into the core); one `BooleanUnion`;
+//! `BooleanIntersection` with a cylinder spanning the bar's length trims the
+//! ribs crossing the bar ends; `BooleanFragments` with the cube and the plane
+//! z = l_adh makes the interface conformal. Entities are found by bounding
+//! box with `Geometry.OCCBoundsUseStl = 1` (tight boxes on curved faces),
+//! never by literal tag. Mesh sizes come from `DefineConstant`s so that the
+//! mesh stage sets them with `-setnumber`; the script never meshes.
+
+use crate::layout::{Layout, RIB_SECTIONS};
+use std::fmt::Write;
+
+/// Default interface mesh size in the script, m (overridden by the mesh stage).
+pub const DEFAULT_H_INTERFACE: f64 = 0.0004;
+/// Default outer mesh size in the script, m (overridden by the mesh stage).
+pub const DEFAULT_H_OUTER: f64 = 0.005;
+
+/// Physical group names, as the mesh stage looks them up.
+pub mod groups {
+    pub const STEEL: &str = "steel";
+    pub const CONCRETE: &str = "concrete";
+    pub const INTERFACE_ADHESIVE: &str = "interface_adhesive";
+    pub const INTERFACE_FREE: &str = "interface_free";
+    pub const BAR_LOADED_END: &str = "bar_loaded_end";
+    pub const BAR_FREE_END: &str = "bar_free_end";
+    pub const CONCRETE_BEARING_FACE: &str = "concrete_bearing_face";
+    pub const CONCRETE_FREE_FACE: &str = "concrete_free_face";
+}
+
+fn num(v: f64) -> String {
+    // Shortest round-trip representation: the script reproduces the layout exactly.
+    let s = format!("{v:?}");
+    if s == "-0.0" {
+        "0".into()
+    } else {
+        s
+    }
+}
+
+/// Writes the `.geo` text for `layout`.
+pub fn write_geo(layout: &Layout) -> String {
+    let mut g = String::new();
+    let w = &mut g;
+    let l = layout.l;
+    let r_out = layout.outer_radius();
+    let has_cut = layout.l_adh < layout.l;
+    let _ = writeln!(
+        w,
+        "// Pull-out specimen: bar along z in a concrete cube (SPEC §2 frame), SI units (m).\n\
+         // Cube x, y in [-L/2, L/2], z in [0, L]; z = 0 free face, z = L loaded (bearing) face.\n\
+         SetFactory(\"OpenCASCADE\");\n\
+         \n\
+         // Bounding boxes from the tessellation: OCC's own boxes of curved faces are\n\
+         // loose and would catch or miss faces in the selections below.\n\
+         Geometry.OCCBoundsUseStl = 1;\n\
+         \n\
+         // Mesh sizes (m). The mesh stage passes -setnumber h_interface/h_outer;\n\
+         // the defaults only make the script usable on its own.\n\
+         DefineConstant[\n  h_interface = {{{hi}, Name \"Parameters/h_interface\"}},\n  h_outer = {{{ho}, Name \"Parameters/h_outer\"}}\n];\n\
+         \n\
+         // Specimen dimensions.\n\
+         L = {L};\nl_adh = {ladh};\nz_lo = {zlo};\nz_hi = {zhi};\nR = {R};\nr_out = {rout};\n\
+         tol = {tol};",
+        hi = num(DEFAULT_H_INTERFACE),
+        ho = num(DEFAULT_H_OUTER),
+        L = num(l),
+        ladh = num(layout.l_adh),
+        zlo = num(layout.z_lo),
+        zhi = num(layout.z_hi),
+        R = num(layout.r),
+        rout = num(r_out),
+        tol = num(1e-6 * l),
+    );
+    let _ = writeln!(
+        w,
+        "\n// Core: cylinder of radius R over the whole bar length.\n\
+         core = newv; Cylinder(core) = {{0, 0, z_lo, 0, 0, z_hi - z_lo, R}};"
+    );
+    match &layout.ribs {
+        None => {
+            let _ = writeln!(w, "bar() = {{core}};");
+        }
+        Some(rl) => {
+            let dip = 0.05 * layout.r;
+            let _ = writeln!(
+                w,
+                "\n// Longitudinal ribs at theta = 0 and pi: isosceles trapezoid (height a_l,\n\
+                 // crest width bl_top, width bl_base where the flanks meet the core circle),\n\
+                 // extended below the core surface so the union overlaps, extruded along z.\n\
+                 a_l = {al};\nbl_top = {blt};\nbl_base = {blb};\nx_foot = {xf};\nx_in = x_foot - {dip};\n\
+                 w_in = bl_base + (bl_base - bl_top) * (x_foot - x_in) / (R + a_l - x_foot);\n\
+                 lrib() = {{}};\n\
+                 For sd In {{0:1}}\n\
+                 \x20 sg = 1 - 2 * sd;\n\
+                 \x20 p1 = newp; Point(p1) = {{sg * x_in, -w_in / 2, z_lo}};\n\
+                 \x20 p2 = newp; Point(p2) = {{sg * (R + a_l), -bl_top / 2, z_lo}};\n\
+                 \x20 p3 = newp; Point(p3) = {{sg * (R + a_l), bl_top / 2, z_lo}};\n\
+                 \x20 p4 = newp; Point(p4) = {{sg * x_in, w_in / 2, z_lo}};\n\
+                 \x20 c1 = newc; Line(c1) = {{p1, p2}}; c2 = newc; Line(c2) = {{p2, p3}};\n\
+                 \x20 c3 = newc; Line(c3) = {{p3, p4}}; c4 = newc; Line(c4) = {{p4, p1}};\n\
+                 \x20 ll = newll; Curve Loop(ll) = {{c1, c2, c3, c4}};\n\
+                 \x20 s = news; Plane Surface(s) = {{ll}};\n\
+                 \x20 ex() = Extrude {{0, 0, z_hi - z_lo}} {{ Surface{{s}}; }};\n\
+                 \x20 lrib() += ex(1);\n\
+                 EndFor",
+                al = num(rl.a_l),
+                blt = num(rl.bl_top),
+                blb = num(rl.bl_base),
+                xf = num(rl.x_foot),
+                dip = num(dip),
+            );
+            let _ = writeln!(
+                w,
+                "\n// Transverse ribs: trapezoid sections (height a, axial widths wb at the core,\n\
+                 // wt at the crest) in planes through the axis at angles t in [t_s, pi - t_s],\n\
+                 // centred on z = zeta + sgn K cos t; a ThruSections through them gives exact\n\
+                 // rib volumes (a helical Pipe does not). Rib ends lie inside the longitudinal\n\
+                 // ribs. Side B (global angle t + pi): sgn = +1 rotated image, -1 mirrored.\n\
+                 // The section curves stay in the model after ThruSections: delete them.\n\
+                 a = {a};\nc = {c};\nK = {k};\nwb = {wb};\nwt = {wt};\nt_s = {ts};\nn_sec = {nsec};\n\
+                 r_in = R - {dip};\nwb_in = wb + (wb - wt) * {dip} / a;\n\
+                 zeta0() = {{{za0}, {zb0}}};\nn_rib() = {{{na}, {nb}}};\nsgn_side() = {{1, {sgb}}};\n\
+                 ribs() = {{}};\n\
+                 For sd In {{0:1}}\n\
+                 \x20 For kr In {{1:n_rib(sd)}}\n\
+                 \x20   zeta = zeta0(sd) + (kr - 1) * c;\n\
+                 \x20   loops() = {{}}; sec() = {{}};\n\
+                 \x20   For j In {{0:n_sec - 1}}\n\
+                 \x20     t = t_s + j * (Pi - 2 * t_s) / (n_sec - 1);\n\
+                 \x20     zc = zeta + sgn_side(sd) * K * Cos(t);\n\
+                 \x20     cx = Cos(t + sd * Pi); cy = Sin(t + sd * Pi);\n\
+                 \x20     q1 = newp; Point(q1) = {{r_in * cx, r_in * cy, zc - wb_in / 2}};\n\
+                 \x20     q2 = newp; Point(q2) = {{(R + a) * cx, (R + a) * cy, zc - wt / 2}};\n\
+                 \x20     q3 = newp; Point(q3) = {{(R + a) * cx, (R + a) * cy, zc + wt / 2}};\n\
+                 \x20     q4 = newp; Point(q4) = {{r_in * cx, r_in * cy, zc + wb_in / 2}};\n\
+                 \x20     e1 = newc; Line(e1) = {{q1, q2}}; e2 = newc; Line(e2) = {{q2, q3}};\n\
+                 \x20     e3 = newc; Line(e3) = {{q3, q4}}; e4 = newc; Line(e4) = {{q4, q1}};\n\
+                 \x20     ll = newll; Curve Loop(ll) = {{e1, e2, e3, e4}};\n\
+                 \x20     loops() += ll; sec() += {{e1, e2, e3, e4}};\n\
+                 \x20   EndFor\n\
+                 \x20   v = newv; ThruSections(v) = {{loops()}};\n\
+                 \x20   Recursive Delete {{ Curve{{sec()}}; }}\n\
+                 \x20   ribs() += v;\n\
+                 \x20 EndFor\n\
+                 EndFor\n\
+                 \n\
+                 // One solid bar: fuse core and all ribs.\n\
+                 bar() = BooleanUnion{{ Volume{{core}}; Delete; }}{{ Volume{{lrib(), ribs()}}; Delete; }};\n\
+                 \n\
+                 // Trim the ribs that cross the bar ends.\n\
+                 trim = newv; Cylinder(trim) = {{0, 0, z_lo, 0, 0, z_hi - z_lo, r_out + R}};\n\
+                 bar() = BooleanIntersection{{ Volume{{bar()}}; Delete; }}{{ Volume{{trim}}; Delete; }};",
+                a = num(rl.a),
+                c = num(rl.c),
+                k = num(rl.k),
+                wb = num(rl.wb),
+                wt = num(rl.wt),
+                ts = num(rl.t_s),
+                nsec = RIB_SECTIONS,
+                dip = num(0.5 * dip.min(0.5 * rl.a)),
+                za0 = num(rl.sides[0].zeta.first().copied().unwrap_or(0.0)),
+                zb0 = num(rl.sides[1].zeta.first().copied().unwrap_or(0.0)),
+                na = rl.sides[0].zeta.len(),
+                nb = rl.sides[1].zeta.len(),
+                sgb = num(rl.sides[1].sign),
+            );
+        }
+    }
+    let _ = writeln!(
+        w,
+        "\n// Concrete cube; fragments with the bar{cut_note} give a conformal\n\
+         // steel-concrete interface split at z = 0{cut_z}, L.\n\
+         cube = newv; Box(cube) = {{-L / 2, -L / 2, 0, L, L, L}};",
+        cut_note = if has_cut {
+            " and the plane z = l_adh"
+        } else {
+            ""
+        },
+        cut_z = if has_cut { ", l_adh" } else { "" },
+    );
+    if has_cut {
+        let _ = writeln!(
+            w,
+            "cut = news; Rectangle(cut) = {{-L / 2, -L / 2, l_adh, L, L}};\n\
+             BooleanFragments{{ Volume{{bar(), cube}}; Delete; }}{{ Surface{{cut}}; Delete; }}"
+        );
+    } else {
+        let _ = writeln!(
+            w,
+            "BooleanFragments{{ Volume{{bar(), cube}}; Delete; }}{{ }}"
+        );
+    }
+    let _ = writeln!(
+        w,
+        "\n// Steel: the volumes inside the bar's box; concrete: all the others.\n\
+         rb = r_out + 0.05 * R;\n\
+         steel() = Volume In BoundingBox{{-rb, -rb, z_lo - tol, rb, rb, z_hi + tol}};\n\
+         concrete() = Volume{{:}};\n\
+         concrete() -= steel();\n\
+         \n\
+         // Interface: bar faces with z in [0, L] except the flat bar sections at\n\
+         // z = 0, l_adh, L; split by the centre of their box at l_adh.\n\
+         cand() = Surface In BoundingBox{{-rb, -rb, -tol, rb, rb, L + tol}};\n\
+         adh() = {{}}; fre() = {{}};\n\
+         For i In {{0:#cand() - 1}}\n\
+         \x20 bb() = BoundingBox Surface{{cand(i)}};\n\
+         \x20 zm = (bb(2) + bb(5)) / 2;\n\
+         \x20 flat = (bb(5) - bb(2) < tol);\n\
+         \x20 atcut = (Fabs(zm) < tol || Fabs(zm - l_adh) < tol || Fabs(zm - L) < tol);\n\
+         \x20 If (!(flat && atcut))\n\
+         \x20   If (zm < l_adh)\n\
+         \x20     adh() += cand(i);\n\
+         \x20   Else\n\
+         \x20     fre() += cand(i);\n\
+         \x20   EndIf\n\
+         \x20 EndIf\n\
+         EndFor\n\
+         \n\
+         // Bar end faces.\n\
+         free_end() = Surface In BoundingBox{{-rb, -rb, z_lo - tol, rb, rb, z_lo + tol}};\n\
+         loaded_end() = Surface In BoundingBox{{-rb, -rb, z_hi - tol, rb, rb, z_hi + tol}};\n\
+         \n\
+         // Concrete faces at z = L (bearing plate) and z = 0, without the bar's section.\n\
+         big = L / 2 + tol;\n\
+         bearing() = Surface In BoundingBox{{-big, -big, L - tol, big, big, L + tol}};\n\
+         inner() = Surface In BoundingBox{{-rb, -rb, L - tol, rb, rb, L + tol}};\n\
+         bearing() -= inner();\n\
+         cfree() = Surface In BoundingBox{{-big, -big, -tol, big, big, tol}};\n\
+         inner() = Surface In BoundingBox{{-rb, -rb, -tol, rb, rb, tol}};\n\
+         cfree() -= inner();\n\
+         \n\
+         // Physical groups read by the mesh stage.\n\
+         Physical Volume(\"{steel}\") = {{steel()}};\n\
+         Physical Volume(\"{concrete}\") = {{concrete()}};\n\
+         Physical Surface(\"{ia}\") = {{adh()}};\n\
+         Physical Surface(\"{ifr}\") = {{fre()}};\n\
+         Physical Surface(\"{le}\") = {{loaded_end()}};\n\
+         Physical Surface(\"{fe}\") = {{free_end()}};\n\
+         Physical Surface(\"{cb}\") = {{bearing()}};\n\
+         Physical Surface(\"{cf}\") = {{cfree()}};",
+        steel = groups::STEEL,
+        concrete = groups::CONCRETE,
+        ia = groups::INTERFACE_ADHESIVE,
+        ifr = groups::INTERFACE_FREE,
+        le = groups::BAR_LOADED_END,
+        fe = groups::BAR_FREE_END,
+        cb = groups::CONCRETE_BEARING_FACE,
+        cf = groups::CONCRETE_FREE_FACE,
+    );
+    let _ = writeln!(
+        w,
+        "\n// Size field (SPEC §9): h(r) = min(h_outer, h_interface + k max(0, r - r_out)),\n\
+         // r the distance to the bar axis: the whole bar and the interface at\n\
+         // h_interface, growing linearly to h_outer at the cube's side faces.\n\
+         k_grow = (h_outer - h_interface) / (L / 2 - r_out);\n\
+         Field[1] = MathEval;\n\
+         Field[1].F = Sprintf(\"Min(%.12g, %.12g + %.12g * Max(0, Sqrt(x * x + y * y) - %.12g))\", h_outer, h_interface, k_grow, r_out);\n\
+         Background Field = 1;\n\
+         // Only the field sets sizes.\n\
+         Mesh.MeshSizeFromPoints = 0;\n\
+         Mesh.MeshSizeFromCurvature = 0;\n\
+         Mesh.MeshSizeExtendFromBoundary = 0;"
+    );
+    g
+}

@@ -1,0 +1,360 @@
+//! Finding and running gmsh as a subprocess.
+//!
+//! Search order: the `GMSH` environment variable (an error if it does not
+//! work: an explicit choice is never silently replaced), the project-local
+//! install of `scripts/setup.sh` (`.tools/gmsh-venv/bin/gmsh`, looked up next
+//! to this crate's workspace and next to every ancestor of the running
+//! executable), then `gmsh` on `PATH`. The PyPI wheel's `bin/gmsh` is a Python
+//! script: it is run with the `python` beside it, which also has gmsh's
+//! Python API (used for measurements on the OpenCASCADE model).
+
+use std::ffi::{OsStr, OsString};
+use std::io::Read;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+/// Relative location of the project-local gmsh install.
+pub const LOCAL_GMSH: &str = ".tools/gmsh-venv/bin/gmsh";
+/// Oldest gmsh whose OpenCASCADE `.geo` features we rely on.
+pub const MIN_VERSION: (u32, u32) = (4, 8);
+
+const SETUP_HINT: &str = "run `scripts/setup.sh` (installs a pinned gmsh in .tools/gmsh-venv), \
+                          or set GMSH to a working gmsh executable";
+
+/// A located, working gmsh.
+#[derive(Debug, Clone)]
+pub struct Gmsh {
+    program: PathBuf,
+    /// Interpreter that runs `program` when it is a Python script.
+    interpreter: Option<PathBuf>,
+    /// Python with gmsh's API, when known.
+    python: Option<PathBuf>,
+    version: String,
+}
+
+/// What a finished gmsh run printed.
+#[derive(Debug, Clone)]
+pub struct GmshOutput {
+    pub stdout: String,
+    pub stderr: String,
+    /// Wall time of the run.
+    pub elapsed: Duration,
+}
+
+/// Why gmsh could not be found or run.
+#[derive(Debug, thiserror::Error)]
+pub enum GmshError {
+    #[error("gmsh not found (looked at $GMSH, {local}, and `gmsh` on PATH): {hint}", local = LOCAL_GMSH, hint = SETUP_HINT)]
+    NotFound,
+    #[error("GMSH={path}: {problem}; fix or unset GMSH, or {hint}", path = .path.display(), hint = SETUP_HINT)]
+    BadEnv { path: PathBuf, problem: String },
+    #[error("{path}: `--version` failed: {problem}; {hint}", path = .path.display(), hint = SETUP_HINT)]
+    Version { path: PathBuf, problem: String },
+    #[error("{path}: version {found} is older than {}.{}; {hint}", MIN_VERSION.0, MIN_VERSION.1, path = .path.display(), hint = SETUP_HINT)]
+    TooOld { path: PathBuf, found: String },
+    #[error("cannot start {program}: {source}")]
+    Spawn {
+        program: String,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("gmsh {args} timed out after {secs:.0} s (killed)")]
+    Timeout { args: String, secs: f64 },
+    #[error("gmsh {args} failed (exit {code:?}):\n{stderr}")]
+    Failed {
+        args: String,
+        code: Option<i32>,
+        stderr: String,
+    },
+    #[error("gmsh's Python API is not available next to {program}; {hint}", program = .program.display(), hint = SETUP_HINT)]
+    NoPythonApi { program: PathBuf },
+    #[error("{path}: {source}", path = .path.display())]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+}
+
+fn is_python_script(path: &Path) -> bool {
+    let mut buf = [0u8; 128];
+    let Ok(mut f) = std::fs::File::open(path) else {
+        return false;
+    };
+    let n = f.read(&mut buf).unwrap_or(0);
+    let head = String::from_utf8_lossy(&buf[..n]);
+    head.starts_with("#!") && head.lines().next().is_some_and(|l| l.contains("python"))
+}
+
+fn find_on_path(name: &str) -> Option<PathBuf> {
+    let path = std::env::var_os("PATH")?;
+    std::env::split_paths(&path)
+        .map(|d| d.join(name))
+        .find(|p| p.is_file())
+}
+
+fn local_candidates() -> Vec<PathBuf> {
+    let mut out = vec![];
+    let manifest = Path::new(env!("CARGO_MANIFEST_DIR"));
+    if let Some(root) = manifest.parent() {
+        out.push(root.join(LOCAL_GMSH));
+    }
+    if let Ok(exe) = std::env::current_exe() {
+        for dir in exe.ancestors().skip(1) {
+            out.push(dir.join(LOCAL_GMSH));
+        }
+    }
+    out
+}
+
+fn parse_version(text: &str) -> Option<(String, (u32, u32))> {
+    text.split_whitespace().rev().find_map(|w| {
+        let mut it = w.split('.');
+        let major = it.next()?.parse().ok()?;
+        let minor = it.next()?.parse().ok()?;
+        Some((w.to_string(), (major, minor)))
+    })
+}
+
+impl Gmsh {
+    /// Finds a working gmsh (module doc for the order) and checks its version.
+    pub fn locate() -> Result<Gmsh, GmshError> {
+        if let Some(env) = std::env::var_os("GMSH").filter(|v| !v.is_empty()) {
+            let path = PathBuf::from(&env);
+            let path = if path.components().count() == 1 && !path.exists() {
+                find_on_path(&env.to_string_lossy()).ok_or_else(|| GmshError::BadEnv {
+                    path: path.clone(),
+                    problem: "not found on PATH".into(),
+                })?
+            } else {
+                path
+            };
+            if !path.is_file() {
+                return Err(GmshError::BadEnv {
+                    path,
+                    problem: "no such file".into(),
+                });
+            }
+            return Gmsh::probe(path).map_err(|e| match e {
+                GmshError::Version { path, problem } => GmshError::BadEnv { path, problem },
+                other => other,
+            });
+        }
+        let mut last_err = None;
+        for cand in local_candidates().into_iter().chain(find_on_path("gmsh")) {
+            if cand.is_file() {
+                match Gmsh::probe(cand) {
+                    Ok(g) => return Ok(g),
+                    Err(e) => last_err = Some(e),
+                }
+            }
+        }
+        Err(last_err.unwrap_or(GmshError::NotFound))
+    }
+
+    /// Uses `program` (checked with `--version`).
+    pub fn probe(program: PathBuf) -> Result<Gmsh, GmshError> {
+        let (interpreter, python) = if is_python_script(&program) {
+            let sibling = program.with_file_name("python");
+            let interp = if sibling.is_file() {
+                sibling
+            } else {
+                find_on_path("python3").unwrap_or_else(|| PathBuf::from("python3"))
+            };
+            (Some(interp.clone()), Some(interp))
+        } else {
+            // A native gmsh: its Python API may be installed for python3.
+            let py = find_on_path("python3");
+            (None, py)
+        };
+        let mut g = Gmsh {
+            program,
+            interpreter,
+            python,
+            version: String::new(),
+        };
+        let out = g
+            .run(&[OsStr::new("--version")], None, Duration::from_secs(60))
+            .map_err(|e| GmshError::Version {
+                path: g.program.clone(),
+                problem: e.to_string(),
+            })?;
+        let text = format!("{}\n{}", out.stdout, out.stderr);
+        let (version, (major, minor)) = parse_version(&text).ok_or_else(|| GmshError::Version {
+            path: g.program.clone(),
+            problem: format!("no version number in its output {:?}", text.trim()),
+        })?;
+        if (major, minor) < MIN_VERSION {
+            return Err(GmshError::TooOld {
+                path: g.program.clone(),
+                found: version,
+            });
+        }
+        g.version = version;
+        Ok(g)
+    }
+
+    /// The version `--version` printed, e.g. "4.15.2".
+    pub fn version(&self) -> &str {
+        &self.version
+    }
+
+    /// The gmsh executable or script.
+    pub fn program(&self) -> &Path {
+        &self.program
+    }
+
+    /// Runs gmsh with `args` in `workdir`, killing it after `timeout`.
+    /// A non-zero exit is an error carrying gmsh's stderr (or stdout).
+    pub fn run<S: AsRef<OsStr>>(
+        &self,
+        args: &[S],
+        workdir: Option<&Path>,
+        timeout: Duration,
+    ) -> Result<GmshOutput, GmshError> {
+        let mut cmd = match &self.interpreter {
+            Some(py) => {
+                let mut c = Command::new(py);
+                c.arg(&self.program);
+                c
+            }
+            None => Command::new(&self.program),
+        };
+        cmd.args(args.iter().map(|a| a.as_ref()));
+        let shown = args
+            .iter()
+            .map(|a| a.as_ref().to_string_lossy().into_owned())
+            .collect::<Vec<_>>()
+            .join(" ");
+        run_with_timeout(cmd, workdir, timeout, &shown)
+    }
+
+    /// Python with gmsh's API, if this gmsh has one.
+    pub fn python(&self) -> Option<&Path> {
+        self.python.as_deref()
+    }
+
+    /// Runs a Python script using gmsh's API (`import gmsh`) in `workdir` with
+    /// extra command-line `args`; errors when no API is available.
+    pub fn run_python<S: AsRef<OsStr>>(
+        &self,
+        script: &str,
+        args: &[S],
+        workdir: &Path,
+        timeout: Duration,
+    ) -> Result<GmshOutput, GmshError> {
+        let py = self.python.as_ref().ok_or_else(|| GmshError::NoPythonApi {
+            program: self.program.clone(),
+        })?;
+        let file = workdir.join(format!(".gmsh-api-{}.py", std::process::id()));
+        std::fs::write(&file, script).map_err(|source| GmshError::Io {
+            path: file.clone(),
+            source,
+        })?;
+        let mut cmd = Command::new(py);
+        cmd.arg(&file).args(args.iter().map(|a| a.as_ref()));
+        let res = run_with_timeout(cmd, Some(workdir), timeout, "(python API)");
+        let _ = std::fs::remove_file(&file);
+        match res {
+            Err(GmshError::Failed { stderr, .. }) if stderr.contains("No module named 'gmsh'") => {
+                Err(GmshError::NoPythonApi {
+                    program: self.program.clone(),
+                })
+            }
+            other => other,
+        }
+    }
+}
+
+fn run_with_timeout(
+    mut cmd: Command,
+    workdir: Option<&Path>,
+    timeout: Duration,
+    shown: &str,
+) -> Result<GmshOutput, GmshError> {
+    if let Some(dir) = workdir {
+        cmd.current_dir(dir);
+    }
+    cmd.stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped());
+    let program: OsString = cmd.get_program().to_owned();
+    let start = Instant::now();
+    let mut child = cmd.spawn().map_err(|source| GmshError::Spawn {
+        program: program.to_string_lossy().into_owned(),
+        source,
+    })?;
+    // Drain both pipes on threads so a chatty gmsh never blocks on a full pipe.
+    let mut out_pipe = child.stdout.take().expect("piped");
+    let mut err_pipe = child.stderr.take().expect("piped");
+    let out_t = std::thread::spawn(move || {
+        let mut s = Vec::new();
+        let _ = out_pipe.read_to_end(&mut s);
+        s
+    });
+    let err_t = std::thread::spawn(move || {
+        let mut s = Vec::new();
+        let _ = err_pipe.read_to_end(&mut s);
+        s
+    });
+    let status = loop {
+        match child.try_wait() {
+            Ok(Some(status)) => break status,
+            Ok(None) if start.elapsed() > timeout => {
+                let _ = child.kill();
+                let _ = child.wait();
+                return Err(GmshError::Timeout {
+                    args: shown.to_string(),
+                    secs: timeout.as_secs_f64(),
+                });
+            }
+            Ok(None) => std::thread::sleep(Duration::from_millis(20)),
+            Err(source) => {
+                return Err(GmshError::Spawn {
+                    program: program.to_string_lossy().into_owned(),
+                    source,
+                })
+            }
+        }
+    };
+    let stdout = String::from_utf8_lossy(&out_t.join().unwrap_or_default()).into_owned();
+    let stderr = String::from_utf8_lossy(&err_t.join().unwrap_or_default()).into_owned();
+    let elapsed = start.elapsed();
+    if !status.success() {
+        let msg = if stderr.trim().is_empty() {
+            &stdout
+        } else {
+            &stderr
+        };
+        return Err(GmshError::Failed {
+            args: shown.to_string(),
+            code: status.code(),
+            stderr: tail(msg, 40),
+        });
+    }
+    Ok(GmshOutput {
+        stdout,
+        stderr,
+        elapsed,
+    })
+}
+
+/// The last `n` lines of `text`.
+pub fn tail(text: &str, n: usize) -> String {
+    let lines: Vec<&str> = text.lines().collect();
+    lines[lines.len().saturating_sub(n)..].join("\n")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Version strings from both the wheel and Debian's gmsh parse (SPEC §4: version checked).
+    #[test]
+    fn versions_parse() {
+        assert_eq!(parse_version("4.15.2\n").unwrap().1, (4, 15));
+        assert_eq!(parse_version("Info: blah\n4.8.4").unwrap().1, (4, 8));
+        assert!(parse_version("no version here").is_none());
+    }
+}

@@ -1,0 +1,499 @@
+//! The `bar` and `specimen` sections of a scene spec: raw (as written, units
+//! unresolved) and resolved (SI, defaults filled in, every bound checked).
+//!
+//! ```
+//! use geom::spec::{resolve, RawBar, RawSpecimen};
+//! let bar: RawBar = serde_yaml::from_str("kind: ribbed\ndiameter: 8 mm\nribs: {angle: 55 deg}").unwrap();
+//! let specimen: RawSpecimen = serde_yaml::from_str("{}").unwrap();
+//! let (bar, specimen) = resolve(&bar, &specimen).unwrap();
+//! assert!((specimen.cube_side - 0.08).abs() < 1e-12); // default 10 d
+//! assert!((bar.ribs.unwrap().transverse.height - 0.52e-3).abs() < 1e-12); // default 0.065 d
+//! ```
+
+use crate::units::{Dim, RawQuantity, UnitError};
+use serde::{Deserialize, Serialize};
+use std::f64::consts::FRAC_PI_2;
+
+/// Smooth or spiral-ribbed bar.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum BarKind {
+    Smooth,
+    Ribbed,
+}
+
+/// How the ribs of side B (π < θ < 2π) derive from those of side A.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum SideB {
+    /// Image of side A by the 180° rotation about the bar axis (spiral bar).
+    #[default]
+    Rotated,
+    /// Mirror image of side A in the plane of the longitudinal ribs (herringbone).
+    Mirrored,
+}
+
+/// What the interface of the non-adhesive zone z ∈ [l_adh, L] does.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum NonAdhesive {
+    /// Duplicated nodes and no interface element: no interaction at all.
+    #[default]
+    Free,
+    /// No-tension, frictionless contact interface.
+    Contact,
+}
+
+/// `bar` as written in the spec.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawBar {
+    pub kind: BarKind,
+    pub diameter: RawQuantity,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ribs: Option<RawRibs>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub longitudinal_ribs: Option<RawLongitudinalRibs>,
+}
+
+/// `bar.ribs` (transverse ribs) as written; every key is optional.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawRibs {
+    pub height: Option<RawQuantity>,
+    pub spacing: Option<RawQuantity>,
+    pub angle: Option<RawQuantity>,
+    pub top_width: Option<RawQuantity>,
+    pub base_width: Option<RawQuantity>,
+    pub side_b: Option<SideB>,
+    pub phase: Option<RawQuantity>,
+}
+
+/// `bar.longitudinal_ribs` as written; every key is optional.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawLongitudinalRibs {
+    pub height: Option<RawQuantity>,
+    pub top_width: Option<RawQuantity>,
+    pub base_width: Option<RawQuantity>,
+}
+
+/// `specimen` as written; every key is optional.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawSpecimen {
+    pub cube_side: Option<RawQuantity>,
+    pub adhesive_length: Option<RawQuantity>,
+    pub free_overhang: Option<RawQuantity>,
+    pub loaded_overhang: Option<RawQuantity>,
+    pub non_adhesive: Option<NonAdhesive>,
+}
+
+/// The resolved bar (SI units).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Bar {
+    pub kind: BarKind,
+    /// Nominal (core) diameter d, m.
+    pub diameter: f64,
+    /// Present exactly when `kind` is `Ribbed`.
+    pub ribs: Option<Ribs>,
+}
+
+/// The rib pattern of a ribbed bar.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Ribs {
+    pub transverse: TransverseRibs,
+    pub longitudinal: LongitudinalRibs,
+}
+
+/// Transverse ribs (paper §3.4.1, SPEC §3). Widths are measured
+/// perpendicular to the rib at mid-rib (θ = π/2); in every plane through the
+/// bar axis the rib section is an isosceles trapezoid whose axial widths are
+/// these widths divided by sin β.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct TransverseRibs {
+    /// Rib height a above the core, m.
+    pub height: f64,
+    /// Axial spacing c between consecutive ribs of one side, m.
+    pub spacing: f64,
+    /// Rib inclination β to the bar axis, rad (π/2 gives rings).
+    pub angle: f64,
+    /// Width b_top at the rib crest, m.
+    pub top_width: f64,
+    /// Width b_base at the core surface, m.
+    pub base_width: f64,
+    pub side_b: SideB,
+    /// Axial offset of side B's ribs from the rotated/mirrored image of side A, m.
+    pub phase: f64,
+}
+
+/// The two longitudinal ribs at θ = 0 and θ = π (isosceles trapezoid section
+/// in the cross-section plane, along the whole bar).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct LongitudinalRibs {
+    /// Height a_l above the core surface, m.
+    pub height: f64,
+    /// Width at the crest, m.
+    pub top_width: f64,
+    /// Width where the flanks meet the core surface, m.
+    pub base_width: f64,
+}
+
+/// The resolved pull-out specimen (SI units; SPEC §2 frame).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Specimen {
+    /// Cube side L, m; the cube spans x, y ∈ [−L/2, L/2], z ∈ [0, L].
+    pub cube_side: f64,
+    /// Adhesive (bonded) length l_adh, m: z ∈ [0, l_adh].
+    pub adhesive_length: f64,
+    /// Bar length e_free beyond the free face z = 0, m.
+    pub free_overhang: f64,
+    /// Bar length e_load beyond the loaded face z = L, m.
+    pub loaded_overhang: f64,
+    pub non_adhesive: NonAdhesive,
+}
+
+impl Bar {
+    /// Outer radius of the bar (core plus the tallest rib), m.
+    pub fn outer_radius(&self) -> f64 {
+        let r = self.diameter / 2.0;
+        match &self.ribs {
+            None => r,
+            Some(ribs) => r + ribs.transverse.height.max(ribs.longitudinal.height),
+        }
+    }
+}
+
+impl Specimen {
+    /// Lowest z of the bar (its free end), m.
+    pub fn bar_z_min(&self) -> f64 {
+        -self.free_overhang
+    }
+    /// Highest z of the bar (its loaded end), m.
+    pub fn bar_z_max(&self) -> f64 {
+        self.cube_side + self.loaded_overhang
+    }
+}
+
+/// A spec value that violates a bound or cannot be read.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum SpecError {
+    #[error(transparent)]
+    Unit(#[from] UnitError),
+    #[error("{key} = {value}: must be {bound}")]
+    OutOfBounds {
+        key: String,
+        value: String,
+        bound: String,
+    },
+    #[error("{key} = {value} rad is above 90°; plain numbers are radians: did you mean \"{value} deg\"?")]
+    AngleInRadians { key: String, value: f64 },
+    #[error("{key}: {problem}")]
+    Inconsistent { key: String, problem: String },
+}
+
+/// Defaults derived from the diameter (SPEC §3, EN 10080 / ISO 6935-2 orders
+/// of magnitude): a = 0.065 d, c = 0.625 d, β = 55°, b_top = 0.1 d,
+/// b_base = b_top + 2a (45° flanks); longitudinal ribs as tall as the
+/// transverse ones with the same widths.
+pub mod defaults {
+    /// Transverse rib height / d.
+    pub const RIB_HEIGHT_PER_D: f64 = 0.065;
+    /// Rib spacing / d.
+    pub const RIB_SPACING_PER_D: f64 = 0.625;
+    /// Rib angle, degrees.
+    pub const RIB_ANGLE_DEG: f64 = 55.0;
+    /// Rib crest width / d.
+    pub const RIB_TOP_WIDTH_PER_D: f64 = 0.1;
+    /// Cube side / d (RILEM).
+    pub const CUBE_SIDE_PER_D: f64 = 10.0;
+    /// Free-end overhang / d.
+    pub const FREE_OVERHANG_PER_D: f64 = 0.25;
+    /// Loaded-end overhang / d.
+    pub const LOADED_OVERHANG_PER_D: f64 = 0.5;
+}
+
+fn mm(v: f64) -> String {
+    show(v, Dim::Length)
+}
+
+fn show(v: f64, dim: Dim) -> String {
+    match dim {
+        Dim::Length => {
+            let s = format!("{}", v * 1e3);
+            format!("{s} mm")
+        }
+        Dim::Angle => format!("{} deg", v.to_degrees()),
+        _ => format!("{v} {}", dim.si_unit()),
+    }
+}
+
+fn bound(key: &str, v: f64, dim: Dim, ok: bool, bound: impl Into<String>) -> Result<(), SpecError> {
+    if ok {
+        Ok(())
+    } else {
+        Err(SpecError::OutOfBounds {
+            key: key.to_string(),
+            value: show(v, dim),
+            bound: bound.into(),
+        })
+    }
+}
+
+fn positive(key: &str, v: f64) -> Result<(), SpecError> {
+    bound(key, v, Dim::Length, v > 0.0, "> 0")
+}
+
+fn len(q: &Option<RawQuantity>, key: &str, default: f64) -> Result<f64, SpecError> {
+    match q {
+        Some(q) => Ok(q.to_si(Dim::Length, key)?),
+        None => Ok(default),
+    }
+}
+
+/// Resolves and validates `bar` and `specimen` (SPEC §2, §3). Errors name the
+/// dotted key, its value with unit and the violated bound.
+pub fn resolve(bar: &RawBar, specimen: &RawSpecimen) -> Result<(Bar, Specimen), SpecError> {
+    let d = bar.diameter.to_si(Dim::Length, "bar.diameter")?;
+    positive("bar.diameter", d)?;
+
+    let ribs = match bar.kind {
+        BarKind::Smooth => {
+            for (present, key) in [
+                (bar.ribs.is_some(), "bar.ribs"),
+                (bar.longitudinal_ribs.is_some(), "bar.longitudinal_ribs"),
+            ] {
+                if present {
+                    return Err(SpecError::Inconsistent {
+                        key: key.into(),
+                        problem: "given for a smooth bar (bar.kind = smooth); remove it or set bar.kind: ribbed"
+                            .into(),
+                    });
+                }
+            }
+            None
+        }
+        BarKind::Ribbed => Some(resolve_ribs(
+            bar.ribs.as_ref().cloned().unwrap_or_default(),
+            bar.longitudinal_ribs.as_ref().cloned().unwrap_or_default(),
+            d,
+        )?),
+    };
+    let bar = Bar {
+        kind: bar.kind,
+        diameter: d,
+        ribs,
+    };
+
+    let l = len(
+        &specimen.cube_side,
+        "specimen.cube_side",
+        defaults::CUBE_SIDE_PER_D * d,
+    )?;
+    positive("specimen.cube_side", l)?;
+    let outer = 2.0 * bar.outer_radius();
+    bound(
+        "specimen.cube_side",
+        l,
+        Dim::Length,
+        l > outer * (1.0 + 1e-6),
+        format!(
+            "> {} (the ribbed bar's outer diameter): the cube must be wider than the bar",
+            mm(outer)
+        ),
+    )?;
+    let l_adh = len(
+        &specimen.adhesive_length,
+        "specimen.adhesive_length",
+        l / 2.0,
+    )?;
+    positive("specimen.adhesive_length", l_adh)?;
+    bound(
+        "specimen.adhesive_length",
+        l_adh,
+        Dim::Length,
+        l_adh <= l * (1.0 + 1e-12),
+        format!("<= specimen.cube_side = {}", mm(l)),
+    )?;
+    let l_adh = l_adh.min(l);
+    let e_free = len(
+        &specimen.free_overhang,
+        "specimen.free_overhang",
+        defaults::FREE_OVERHANG_PER_D * d,
+    )?;
+    bound(
+        "specimen.free_overhang",
+        e_free,
+        Dim::Length,
+        e_free >= 0.0,
+        ">= 0",
+    )?;
+    let e_load = len(
+        &specimen.loaded_overhang,
+        "specimen.loaded_overhang",
+        defaults::LOADED_OVERHANG_PER_D * d,
+    )?;
+    bound(
+        "specimen.loaded_overhang",
+        e_load,
+        Dim::Length,
+        e_load >= 0.0,
+        ">= 0",
+    )?;
+
+    Ok((
+        bar,
+        Specimen {
+            cube_side: l,
+            adhesive_length: l_adh,
+            free_overhang: e_free,
+            loaded_overhang: e_load,
+            non_adhesive: specimen.non_adhesive.unwrap_or_default(),
+        },
+    ))
+}
+
+fn resolve_ribs(raw: RawRibs, raw_l: RawLongitudinalRibs, d: f64) -> Result<Ribs, SpecError> {
+    let r = d / 2.0;
+    let a = len(
+        &raw.height,
+        "bar.ribs.height",
+        defaults::RIB_HEIGHT_PER_D * d,
+    )?;
+    positive("bar.ribs.height", a)?;
+    bound(
+        "bar.ribs.height",
+        a,
+        Dim::Length,
+        a < r,
+        format!("< d/2 = {} (ribs taller than the core radius)", mm(r)),
+    )?;
+    let c = len(
+        &raw.spacing,
+        "bar.ribs.spacing",
+        defaults::RIB_SPACING_PER_D * d,
+    )?;
+    positive("bar.ribs.spacing", c)?;
+
+    let beta = match &raw.angle {
+        None => defaults::RIB_ANGLE_DEG.to_radians(),
+        Some(q) => {
+            let v = q.to_si(Dim::Angle, "bar.ribs.angle")?;
+            if let RawQuantity::Number(n) = q {
+                if *n > FRAC_PI_2 {
+                    return Err(SpecError::AngleInRadians {
+                        key: "bar.ribs.angle".into(),
+                        value: *n,
+                    });
+                }
+            }
+            v
+        }
+    };
+    bound(
+        "bar.ribs.angle",
+        beta,
+        Dim::Angle,
+        beta > 0.0 && beta <= FRAC_PI_2 * (1.0 + 1e-12),
+        "in (0, 90] deg",
+    )?;
+    let beta = beta.min(FRAC_PI_2);
+
+    let b_top = len(
+        &raw.top_width,
+        "bar.ribs.top_width",
+        defaults::RIB_TOP_WIDTH_PER_D * d,
+    )?;
+    positive("bar.ribs.top_width", b_top)?;
+    let b_base = len(&raw.base_width, "bar.ribs.base_width", b_top + 2.0 * a)?;
+    positive("bar.ribs.base_width", b_base)?;
+    bound(
+        "bar.ribs.base_width",
+        b_base,
+        Dim::Length,
+        b_base >= b_top,
+        format!(
+            ">= bar.ribs.top_width = {} (isosceles trapezoid, crest not wider than base)",
+            mm(b_top)
+        ),
+    )?;
+    let gap_limit = c * beta.sin();
+    bound(
+        "bar.ribs.base_width",
+        b_base,
+        Dim::Length,
+        b_base < 0.98 * gap_limit,
+        format!(
+            "< 0.98 c sin(beta) = {} (neighbouring ribs would overlap: c = {}, beta = {} deg)",
+            mm(0.98 * gap_limit),
+            mm(c),
+            beta.to_degrees()
+        ),
+    )?;
+    let phase = len(&raw.phase, "bar.ribs.phase", 0.0)?;
+    bound(
+        "bar.ribs.phase",
+        phase,
+        Dim::Length,
+        (0.0..c).contains(&phase),
+        format!("in [0, bar.ribs.spacing = {})", mm(c)),
+    )?;
+
+    let a_l = len(&raw_l.height, "bar.longitudinal_ribs.height", a)?;
+    positive("bar.longitudinal_ribs.height", a_l)?;
+    bound(
+        "bar.longitudinal_ribs.height",
+        a_l,
+        Dim::Length,
+        a_l < r,
+        format!("< d/2 = {} (ribs taller than the core radius)", mm(r)),
+    )?;
+    bound(
+        "bar.longitudinal_ribs.height",
+        a_l,
+        Dim::Length,
+        a_l >= a,
+        format!(
+            ">= bar.ribs.height = {} (transverse ribs end inside the longitudinal ribs)",
+            mm(a)
+        ),
+    )?;
+    let bl_top = len(&raw_l.top_width, "bar.longitudinal_ribs.top_width", b_top)?;
+    positive("bar.longitudinal_ribs.top_width", bl_top)?;
+    let bl_base = len(
+        &raw_l.base_width,
+        "bar.longitudinal_ribs.base_width",
+        bl_top + 2.0 * a_l,
+    )?;
+    positive("bar.longitudinal_ribs.base_width", bl_base)?;
+    bound(
+        "bar.longitudinal_ribs.base_width",
+        bl_base,
+        Dim::Length,
+        bl_base >= bl_top,
+        format!(">= bar.longitudinal_ribs.top_width = {}", mm(bl_top)),
+    )?;
+    bound(
+        "bar.longitudinal_ribs.base_width",
+        bl_base,
+        Dim::Length,
+        bl_base <= r,
+        format!("<= d/2 = {} (leaves room for the transverse ribs)", mm(r)),
+    )?;
+    Ok(Ribs {
+        transverse: TransverseRibs {
+            height: a,
+            spacing: c,
+            angle: beta,
+            top_width: b_top,
+            base_width: b_base,
+            side_b: raw.side_b.unwrap_or_default(),
+            phase,
+        },
+        longitudinal: LongitudinalRibs {
+            height: a_l,
+            top_width: bl_top,
+            base_width: bl_base,
+        },
+    })
+}

@@ -1,0 +1,31 @@
+//! Helpers shared by the geometry integration tests.
+#![allow(dead_code)]
+
+use geom::spec::{resolve, Bar, RawBar, RawSpecimen, Specimen};
+use std::path::{Path, PathBuf};
+
+/// The workspace root.
+pub fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .unwrap()
+        .to_path_buf()
+}
+
+/// Reads the `bar` and `specimen` sections of a shipped scene spec.
+pub fn load_spec(name: &str) -> (Bar, Specimen) {
+    let path = root().join("specs").join(format!("{name}.yaml"));
+    let text = std::fs::read_to_string(&path).unwrap();
+    let doc: serde_yaml::Value = serde_yaml::from_str(&text).unwrap();
+    let bar: RawBar = serde_yaml::from_value(doc["bar"].clone()).unwrap();
+    let specimen: RawSpecimen = serde_yaml::from_value(doc["specimen"].clone()).unwrap();
+    resolve(&bar, &specimen).unwrap()
+}
+
+/// A fresh scratch directory under the target directory.
+pub fn scratch(name: &str) -> PathBuf {
+    let dir = root().join("target").join("geom-tests").join(name);
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
