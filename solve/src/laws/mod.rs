@@ -175,3 +175,27 @@ impl InterfaceLaw for AnyInterfaceLaw {
         }
     }
 }
+
+/// Any bulk law of SPEC §5, dispatched at run time (one per element).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(tag = "law", rename_all = "snake_case")]
+pub enum AnyBulkLaw {
+    Mazars(mazars::Mazars),
+    J2(j2::J2),
+    Elastic(elastic::LinearElastic),
+}
+
+impl BulkLaw for AnyBulkLaw {
+    fn step(
+        &self,
+        committed: &BulkState,
+        strain: &Vector6<f64>,
+        kind: TangentKind,
+    ) -> Result<BulkResponse, LawError> {
+        match self {
+            AnyBulkLaw::Mazars(l) => l.step(committed, strain, kind),
+            AnyBulkLaw::J2(l) => l.step(committed, strain, kind),
+            AnyBulkLaw::Elastic(l) => l.step(committed, strain, kind),
+        }
+    }
+}

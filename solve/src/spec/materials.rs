@@ -1,0 +1,585 @@
+//! The scene's `materials` section (SPEC §5): raw as written, resolved to SI
+//! laws with defaults and bounds. Keys and defaults are listed in
+//! `specs/README.md` under `## materials`.
+//!
+//! ```
+//! use solve::spec::materials::{RawMaterials, ConcreteModel};
+//! let raw: RawMaterials = serde_yaml::from_str(r#"
+//! concrete: {law: mazars, E: "30 GPa", nu: 0.2, ft: "3 MPa", Gf: "130 N/m"}
+//! interface: {law: fczm, delta_s: 0.16}
+//! "#).unwrap();
+//! let m = raw.resolve().unwrap();
+//! let ConcreteModel::Mazars(c) = &m.concrete else { panic!() };
+//! let element_law = c.at_size(0.4e-3).unwrap(); // per element, l from eq. (11)
+//! # let _ = element_law;
+//! ```
+
+use crate::laws::coulomb::Coulomb;
+use crate::laws::elastic::{ElasticInterface, LinearElastic};
+use crate::laws::fczm::{Fczm, DEFAULT_GAMMA};
+use crate::laws::j2::J2;
+use crate::laws::mazars::{
+    CompressionSoftening, MazarsMaterial, MazarsSizeError, TensionSoftening, DEFAULT_EPS_D0,
+    DEFAULT_SHEAR_EXPONENT,
+};
+use crate::laws::tvergaard::Tvergaard;
+use crate::laws::{AnyBulkLaw, AnyInterfaceLaw};
+use geom::units::{Dim, RawQuantity, UnitError};
+use serde::{Deserialize, Serialize};
+
+/// Calibration ratio ξ of eqs. (27)–(28).
+pub const DEFAULT_XI: f64 = 0.72;
+/// Calibrated interface damage threshold λ_0, m (Table 4).
+pub const DEFAULT_LAMBDA0: f64 = 5e-5;
+/// Calibrated friction coefficient μ (Table 4).
+pub const DEFAULT_MU: f64 = 0.3;
+/// Calibrated ζ of eq. (22) (§3.3).
+pub const DEFAULT_ZETA: f64 = 8.0;
+
+/// δ_s from eq. (29): 1 − 0.3889e-6 f_t, f_t the interface strength in Pa.
+pub fn delta_s_eq29(ft: f64) -> f64 {
+    1.0 - 0.3889e-6 * ft
+}
+
+/// A materials spec error; `key` is the dotted spec path.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum MaterialsSpecError {
+    #[error(transparent)]
+    Unit(#[from] UnitError),
+    #[error("{key}: missing (required by law {law})")]
+    Missing { key: String, law: String },
+    #[error("{key}: {value} is out of range: must be {bound}")]
+    OutOfRange {
+        key: String,
+        value: f64,
+        bound: String,
+    },
+    #[error("{key}: unknown law {law:?} (accepted: {accepted})")]
+    UnknownLaw {
+        key: String,
+        law: String,
+        accepted: &'static str,
+    },
+    #[error("{key}: not a parameter of law {law}")]
+    NotForLaw { key: String, law: String },
+    #[error("{key}: {detail}")]
+    Inconsistent { key: String, detail: String },
+}
+
+/// `materials.concrete` as written.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawConcrete {
+    /// `mazars` (default) or `elastic`.
+    pub law: Option<String>,
+    #[serde(rename = "E")]
+    pub young_modulus: Option<RawQuantity>,
+    pub nu: Option<RawQuantity>,
+    pub ft: Option<RawQuantity>,
+    pub eps_d0: Option<RawQuantity>,
+    pub beta: Option<RawQuantity>,
+    #[serde(rename = "Gf")]
+    pub gf: Option<RawQuantity>,
+    #[serde(rename = "At")]
+    pub a_t: Option<RawQuantity>,
+    #[serde(rename = "Bt")]
+    pub b_t: Option<RawQuantity>,
+    #[serde(rename = "Ac")]
+    pub a_c: Option<RawQuantity>,
+    #[serde(rename = "Bc")]
+    pub b_c: Option<RawQuantity>,
+}
+
+/// `materials.steel` as written.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawSteel {
+    /// `j2` (default) or `elastic`.
+    pub law: Option<String>,
+    #[serde(rename = "E")]
+    pub young_modulus: Option<RawQuantity>,
+    pub nu: Option<RawQuantity>,
+    pub sigma_y: Option<RawQuantity>,
+}
+
+/// `materials.interface` as written.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawInterface {
+    /// `fczm` (default), `tvergaard`, `coulomb` or `elastic`.
+    pub law: Option<String>,
+    pub ft: Option<RawQuantity>,
+    #[serde(rename = "Gf")]
+    pub gf: Option<RawQuantity>,
+    pub lambda0: Option<RawQuantity>,
+    pub delta_s: Option<RawQuantity>,
+    pub mu: Option<RawQuantity>,
+    pub zeta: Option<RawQuantity>,
+    pub gamma: Option<RawQuantity>,
+    pub xi: Option<RawQuantity>,
+    #[serde(rename = "Kn")]
+    pub kn: Option<RawQuantity>,
+    #[serde(rename = "Ks")]
+    pub ks: Option<RawQuantity>,
+    #[serde(rename = "C")]
+    pub cohesion: Option<RawQuantity>,
+    pub phi: Option<RawQuantity>,
+}
+
+/// The `materials` section as written.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawMaterials {
+    #[serde(default)]
+    pub concrete: RawConcrete,
+    #[serde(default)]
+    pub steel: RawSteel,
+    #[serde(default)]
+    pub interface: RawInterface,
+}
+
+/// Resolved concrete.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[serde(tag = "law", rename_all = "snake_case")]
+pub enum ConcreteModel {
+    Mazars(MazarsMaterial),
+    Elastic(LinearElastic),
+}
+
+impl ConcreteModel {
+    /// The law of an element of characteristic size `l` (m, eq. 11).
+    pub fn at_size(&self, l: f64) -> Result<AnyBulkLaw, MazarsSizeError> {
+        match self {
+            ConcreteModel::Mazars(m) => m.at_size(l).map(AnyBulkLaw::Mazars),
+            ConcreteModel::Elastic(e) => Ok(AnyBulkLaw::Elastic(*e)),
+        }
+    }
+}
+
+/// Resolved steel.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[serde(tag = "law", rename_all = "snake_case")]
+pub enum SteelModel {
+    J2(J2),
+    Elastic(LinearElastic),
+}
+
+impl SteelModel {
+    pub fn law(&self) -> AnyBulkLaw {
+        match self {
+            SteelModel::J2(j) => AnyBulkLaw::J2(*j),
+            SteelModel::Elastic(e) => AnyBulkLaw::Elastic(*e),
+        }
+    }
+}
+
+/// Resolved interface of the adhesive zone (explicit or calibrated values).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct InterfaceModel {
+    pub law: AnyInterfaceLaw,
+}
+
+/// The resolved `materials` section (SI).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Materials {
+    pub concrete: ConcreteModel,
+    pub steel: SteelModel,
+    pub interface: InterfaceModel,
+}
+
+/// Reads optional quantities under a dotted prefix.
+pub(crate) struct Keys<'a> {
+    pub prefix: &'a str,
+    pub law: &'a str,
+}
+
+impl Keys<'_> {
+    pub fn key(&self, name: &str) -> String {
+        format!("{}.{name}", self.prefix)
+    }
+    fn get(
+        &self,
+        q: &Option<RawQuantity>,
+        name: &str,
+        dim: Dim,
+    ) -> Result<Option<f64>, MaterialsSpecError> {
+        q.as_ref()
+            .map(|q| q.to_si(dim, &self.key(name)))
+            .transpose()
+            .map_err(Into::into)
+    }
+    fn req(
+        &self,
+        q: &Option<RawQuantity>,
+        name: &str,
+        dim: Dim,
+    ) -> Result<f64, MaterialsSpecError> {
+        self.get(q, name, dim)?
+            .ok_or_else(|| MaterialsSpecError::Missing {
+                key: self.key(name),
+                law: self.law.to_string(),
+            })
+    }
+    fn not_for(&self, set: &[(&str, bool)]) -> Result<(), MaterialsSpecError> {
+        match set.iter().find(|(_, present)| *present) {
+            Some((name, _)) => Err(MaterialsSpecError::NotForLaw {
+                key: self.key(name),
+                law: self.law.to_string(),
+            }),
+            None => Ok(()),
+        }
+    }
+    fn check(
+        &self,
+        name: &str,
+        value: f64,
+        ok: bool,
+        bound: &str,
+    ) -> Result<f64, MaterialsSpecError> {
+        if ok {
+            Ok(value)
+        } else {
+            Err(MaterialsSpecError::OutOfRange {
+                key: self.key(name),
+                value,
+                bound: bound.to_string(),
+            })
+        }
+    }
+    fn positive(&self, name: &str, v: f64) -> Result<f64, MaterialsSpecError> {
+        self.check(name, v, v > 0.0, "> 0")
+    }
+    fn poisson(&self, v: f64) -> Result<f64, MaterialsSpecError> {
+        self.check("nu", v, v > -1.0 && v < 0.5, "in (-1, 0.5)")
+    }
+}
+
+fn law_name(
+    raw: &Option<String>,
+    default: &str,
+    prefix: &str,
+    accepted: &'static str,
+) -> Result<String, MaterialsSpecError> {
+    let law = raw.clone().unwrap_or_else(|| default.to_string());
+    if accepted.split(", ").any(|a| a == law) {
+        Ok(law)
+    } else {
+        Err(MaterialsSpecError::UnknownLaw {
+            key: format!("{prefix}.law"),
+            law,
+            accepted,
+        })
+    }
+}
+
+/// Resolves `raw` as concrete under `prefix` (e.g. `materials.concrete`).
+pub fn resolve_concrete(
+    raw: &RawConcrete,
+    prefix: &str,
+) -> Result<ConcreteModel, MaterialsSpecError> {
+    let law = law_name(&raw.law, "mazars", prefix, "mazars, elastic")?;
+    let k = Keys { prefix, law: &law };
+    let e = k.positive(
+        "E",
+        k.get(&raw.young_modulus, "E", Dim::Stress)?.unwrap_or(30e9),
+    )?;
+    let nu = k.poisson(k.get(&raw.nu, "nu", Dim::Dimensionless)?.unwrap_or(0.2))?;
+    if law == "elastic" {
+        k.not_for(&[
+            ("ft", raw.ft.is_some()),
+            ("eps_d0", raw.eps_d0.is_some()),
+            ("beta", raw.beta.is_some()),
+            ("Gf", raw.gf.is_some()),
+            ("At", raw.a_t.is_some()),
+            ("Bt", raw.b_t.is_some()),
+            ("Ac", raw.a_c.is_some()),
+            ("Bc", raw.b_c.is_some()),
+        ])?;
+        return Ok(ConcreteModel::Elastic(LinearElastic {
+            young_modulus: e,
+            poisson_ratio: nu,
+        }));
+    }
+    let eps_d0 = match (
+        k.get(&raw.ft, "ft", Dim::Stress)?,
+        k.get(&raw.eps_d0, "eps_d0", Dim::Dimensionless)?,
+    ) {
+        (Some(_), Some(_)) => {
+            return Err(MaterialsSpecError::Inconsistent {
+                key: k.key("eps_d0"),
+                detail: "give ft or eps_d0 (= ft/E), not both".into(),
+            })
+        }
+        (Some(ft), None) => k.positive("ft", ft)? / e,
+        (None, Some(e0)) => k.positive("eps_d0", e0)?,
+        (None, None) => DEFAULT_EPS_D0,
+    };
+    let beta = k.positive(
+        "beta",
+        k.get(&raw.beta, "beta", Dim::Dimensionless)?
+            .unwrap_or(DEFAULT_SHEAR_EXPONENT),
+    )?;
+    let tension = if raw.a_t.is_some() || raw.b_t.is_some() {
+        k.not_for(&[("Gf", raw.gf.is_some())])
+            .map_err(|_| MaterialsSpecError::Inconsistent {
+                key: k.key("Gf"),
+                detail: "give Gf (regularised tension) or At and Bt (classic), not both".into(),
+            })?;
+        let a_t = k.req(&raw.a_t, "At", Dim::Dimensionless)?;
+        let a_t = k.check("At", a_t, (0.0..=1.0).contains(&a_t), "in [0, 1]")?;
+        let b_t = k.positive("Bt", k.req(&raw.b_t, "Bt", Dim::Dimensionless)?)?;
+        TensionSoftening::Classic { a_t, b_t }
+    } else {
+        let gf = k.positive(
+            "Gf",
+            k.get(&raw.gf, "Gf", Dim::EnergyPerArea)?.unwrap_or(130.0),
+        )?;
+        TensionSoftening::Regularised {
+            fracture_energy: gf,
+        }
+    };
+    let compression = if raw.a_c.is_some() || raw.b_c.is_some() {
+        let a_c = k.req(&raw.a_c, "Ac", Dim::Dimensionless)?;
+        let a_c = k.check("Ac", a_c, a_c >= 0.0, ">= 0")?;
+        let b_c = k.positive("Bc", k.req(&raw.b_c, "Bc", Dim::Dimensionless)?)?;
+        CompressionSoftening::Classic { a_c, b_c }
+    } else {
+        CompressionSoftening::SizeFit
+    };
+    Ok(ConcreteModel::Mazars(MazarsMaterial {
+        young_modulus: e,
+        poisson_ratio: nu,
+        eps_d0,
+        shear_exponent: beta,
+        tension,
+        compression,
+    }))
+}
+
+/// Resolves `raw` as steel under `prefix`.
+pub fn resolve_steel(raw: &RawSteel, prefix: &str) -> Result<SteelModel, MaterialsSpecError> {
+    let law = law_name(&raw.law, "j2", prefix, "j2, elastic")?;
+    let k = Keys { prefix, law: &law };
+    let e = k.positive(
+        "E",
+        k.get(&raw.young_modulus, "E", Dim::Stress)?
+            .unwrap_or(200e9),
+    )?;
+    let nu = k.poisson(k.get(&raw.nu, "nu", Dim::Dimensionless)?.unwrap_or(0.3))?;
+    if law == "elastic" {
+        k.not_for(&[("sigma_y", raw.sigma_y.is_some())])?;
+        return Ok(SteelModel::Elastic(LinearElastic {
+            young_modulus: e,
+            poisson_ratio: nu,
+        }));
+    }
+    let sy = k.positive(
+        "sigma_y",
+        k.get(&raw.sigma_y, "sigma_y", Dim::Stress)?
+            .unwrap_or(365e6),
+    )?;
+    Ok(SteelModel::J2(J2 {
+        young_modulus: e,
+        poisson_ratio: nu,
+        yield_stress: sy,
+    }))
+}
+
+/// Resolves `raw` as the interface under `prefix`; `concrete` (if any) feeds
+/// the calibration rule f_t = ξ f_t,con, G_f = ξ G_f,con (eqs. 27–28) for
+/// values not given.
+pub fn resolve_interface(
+    raw: &RawInterface,
+    concrete: Option<&ConcreteModel>,
+    prefix: &str,
+) -> Result<InterfaceModel, MaterialsSpecError> {
+    let law = law_name(
+        &raw.law,
+        "fczm",
+        prefix,
+        "fczm, tvergaard, coulomb, elastic",
+    )?;
+    let k = Keys { prefix, law: &law };
+    let cohesive = law == "fczm" || law == "tvergaard";
+    let law = match law.as_str() {
+        "fczm" | "tvergaard" => {
+            k.not_for(&[
+                ("Kn", raw.kn.is_some()),
+                ("Ks", raw.ks.is_some()),
+                ("C", raw.cohesion.is_some()),
+                ("phi", raw.phi.is_some()),
+            ])?;
+            let xi = k
+                .get(&raw.xi, "xi", Dim::Dimensionless)?
+                .unwrap_or(DEFAULT_XI);
+            let xi = k.check("xi", xi, xi > 0.0 && xi <= 1.0, "in (0, 1]")?;
+            let con = match concrete {
+                Some(ConcreteModel::Mazars(m)) => Some(m),
+                _ => None,
+            };
+            let calibrated = |name: &str, what: &str, from: Option<f64>| {
+                from.map(|v| xi * v)
+                    .ok_or_else(|| MaterialsSpecError::Missing {
+                        key: k.key(name),
+                        law: format!("{} (no Mazars concrete {what} to calibrate from)", k.law),
+                    })
+            };
+            let ft = match k.get(&raw.ft, "ft", Dim::Stress)? {
+                Some(v) => v,
+                None => calibrated("ft", "ft", con.map(|m| m.tensile_strength()))?,
+            };
+            let ft = k.positive("ft", ft)?;
+            let gf = match k.get(&raw.gf, "Gf", Dim::EnergyPerArea)? {
+                Some(v) => v,
+                None => calibrated(
+                    "Gf",
+                    "Gf",
+                    con.and_then(|m| match m.tension {
+                        TensionSoftening::Regularised { fracture_energy } => Some(fracture_energy),
+                        TensionSoftening::Classic { .. } => None,
+                    }),
+                )?,
+            };
+            let gf = k.positive("Gf", gf)?;
+            let lambda0 = k.positive(
+                "lambda0",
+                k.get(&raw.lambda0, "lambda0", Dim::Length)?
+                    .unwrap_or(DEFAULT_LAMBDA0),
+            )?;
+            let delta_s = match k.get(&raw.delta_s, "delta_s", Dim::Dimensionless)? {
+                Some(v) => k.positive("delta_s", v)?,
+                None => {
+                    let v = delta_s_eq29(ft);
+                    if v <= 0.0 {
+                        return Err(MaterialsSpecError::Inconsistent {
+                            key: k.key("delta_s"),
+                            detail: format!(
+                                "eq. (29) gives {v} <= 0 for ft = {ft} Pa; give delta_s"
+                            ),
+                        });
+                    }
+                    v
+                }
+            };
+            if law == "tvergaard" {
+                k.not_for(&[
+                    ("mu", raw.mu.is_some()),
+                    ("zeta", raw.zeta.is_some()),
+                    ("gamma", raw.gamma.is_some()),
+                ])?;
+                AnyInterfaceLaw::Tvergaard(Tvergaard {
+                    tensile_strength: ft,
+                    fracture_energy: gf,
+                    lambda0,
+                    delta_s,
+                })
+            } else {
+                let mu = k
+                    .get(&raw.mu, "mu", Dim::Dimensionless)?
+                    .unwrap_or(DEFAULT_MU);
+                let mu = k.check("mu", mu, mu >= 0.0, ">= 0")?;
+                let zeta = k.positive(
+                    "zeta",
+                    k.get(&raw.zeta, "zeta", Dim::Dimensionless)?
+                        .unwrap_or(DEFAULT_ZETA),
+                )?;
+                let gamma = k
+                    .get(&raw.gamma, "gamma", Dim::Stress)?
+                    .unwrap_or(DEFAULT_GAMMA);
+                let gamma = k.check("gamma", gamma, gamma < 0.0, "< 0 (a compressive stress)")?;
+                AnyInterfaceLaw::Fczm(Fczm {
+                    tensile_strength: ft,
+                    fracture_energy: gf,
+                    lambda0,
+                    delta_s,
+                    friction: mu,
+                    zeta,
+                    gamma,
+                    min_damage: 0.0,
+                })
+            }
+        }
+        "coulomb" => {
+            k.not_for(&[
+                ("Gf", raw.gf.is_some()),
+                ("lambda0", raw.lambda0.is_some()),
+                ("delta_s", raw.delta_s.is_some()),
+                ("mu", raw.mu.is_some()),
+                ("zeta", raw.zeta.is_some()),
+                ("gamma", raw.gamma.is_some()),
+                ("xi", raw.xi.is_some()),
+            ])?;
+            let kn = k.positive("Kn", k.req(&raw.kn, "Kn", Dim::StiffnessPerArea)?)?;
+            let ks = k.positive("Ks", k.req(&raw.ks, "Ks", Dim::StiffnessPerArea)?)?;
+            let c = k.req(&raw.cohesion, "C", Dim::Stress)?;
+            let c = k.check("C", c, c >= 0.0, ">= 0")?;
+            let phi = k.req(&raw.phi, "phi", Dim::Angle)?;
+            let phi = k.check(
+                "phi",
+                phi,
+                (0.0..std::f64::consts::FRAC_PI_2).contains(&phi),
+                "in [0, 90 deg)",
+            )?;
+            let ft = k.req(&raw.ft, "ft", Dim::Stress)?;
+            let limit = if phi > 0.0 {
+                c / phi.tan()
+            } else {
+                f64::INFINITY
+            };
+            let ft = k.check(
+                "ft",
+                ft,
+                ft >= 0.0 && ft <= limit,
+                &format!("in [0, C/tan(phi)] = [0, {limit}] Pa (eq. B.2)"),
+            )?;
+            AnyInterfaceLaw::Coulomb(Coulomb {
+                normal_stiffness: kn,
+                shear_stiffness: ks,
+                tensile_strength: ft,
+                cohesion: c,
+                friction_angle: phi,
+            })
+        }
+        _ => {
+            k.not_for(&[
+                ("ft", raw.ft.is_some()),
+                ("Gf", raw.gf.is_some()),
+                ("lambda0", raw.lambda0.is_some()),
+                ("delta_s", raw.delta_s.is_some()),
+                ("mu", raw.mu.is_some()),
+                ("zeta", raw.zeta.is_some()),
+                ("gamma", raw.gamma.is_some()),
+                ("xi", raw.xi.is_some()),
+                ("C", raw.cohesion.is_some()),
+                ("phi", raw.phi.is_some()),
+            ])?;
+            let kn = k.positive("Kn", k.req(&raw.kn, "Kn", Dim::StiffnessPerArea)?)?;
+            let ks = k.positive("Ks", k.req(&raw.ks, "Ks", Dim::StiffnessPerArea)?)?;
+            AnyInterfaceLaw::Elastic(ElasticInterface {
+                normal_stiffness: kn,
+                shear_stiffness: ks,
+            })
+        }
+    };
+    if !cohesive && raw.xi.is_some() {
+        return Err(MaterialsSpecError::NotForLaw {
+            key: k.key("xi"),
+            law: k.law.to_string(),
+        });
+    }
+    Ok(InterfaceModel { law })
+}
+
+impl RawMaterials {
+    /// Resolves units, defaults, bounds and the interface calibration.
+    pub fn resolve(&self) -> Result<Materials, MaterialsSpecError> {
+        let concrete = resolve_concrete(&self.concrete, "materials.concrete")?;
+        let steel = resolve_steel(&self.steel, "materials.steel")?;
+        let interface = resolve_interface(&self.interface, Some(&concrete), "materials.interface")?;
+        Ok(Materials {
+            concrete,
+            steel,
+            interface,
+        })
+    }
+}
