@@ -1,6 +1,7 @@
 //! Material laws, element kernels, assembly and the nonlinear pull-out solver.
 
 pub mod laws;
+pub mod material_point;
 pub mod assembly;
 pub mod element;
 pub mod fields;
