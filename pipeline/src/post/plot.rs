@@ -11,6 +11,7 @@ use super::{CurveRow, PostError};
 use plotters::coord::Shift;
 /// Pixel coordinates of the drawing backend.
 type BackendCoord = (i32, i32);
+use plotters::coord::combinators::{LogCoord, WithKeyPoints};
 use plotters::coord::types::RangedCoordf64;
 use plotters::element::{Drawable, PointCollection};
 use plotters::prelude::*;
@@ -215,10 +216,13 @@ where
     write_atomic(path, text.as_bytes())
 }
 
-/// Indices of at most [`MARKERS_PER_SERIES`] evenly spread points.
-fn marker_indices(n: usize) -> impl Iterator<Item = usize> {
+/// Indices of at most [`MARKERS_PER_SERIES`] evenly spread points; dense
+/// series start at a phase that depends on the series so that markers of
+/// curves sharing a start (the origin) do not pile up.
+fn marker_indices(n: usize, series: usize) -> impl Iterator<Item = usize> {
     let stride = n.div_ceil(MARKERS_PER_SERIES).max(1);
-    (0..n).step_by(stride)
+    let start = if stride > 1 { (1 + series * stride / 3) % stride } else { 0 };
+    (start..n).step_by(stride)
 }
 
 /// Draws one series (line plus sparse markers) with its legend entry; the
@@ -245,6 +249,7 @@ where
             draw_with(
                 chart,
                 points,
+                index,
                 label,
                 move |c| EmptyElement::at(c) + shape((0, 0)),
                 move |(x, y)| {
@@ -272,6 +277,7 @@ where
 fn draw_with<'a, DB, X, Y, M, L>(
     chart: &mut ChartContext<'a, DB, Cartesian2d<X, Y>>,
     points: &[(f64, f64)],
+    series: usize,
     label: Option<&str>,
     marker: impl Fn((f64, f64)) -> M,
     legend: impl Fn(BackendCoord) -> L + 'a,
@@ -285,7 +291,7 @@ where
     for<'b> &'b M: PointCollection<'b, (f64, f64)>,
     L: IntoDynElement<'a, DB, BackendCoord>,
 {
-    let markers = chart.draw_series(marker_indices(points.len()).map(|i| marker(points[i])))?;
+    let markers = chart.draw_series(marker_indices(points.len(), series).map(|i| marker(points[i])))?;
     if let Some(label) = label {
         markers.label(label).legend(legend);
     }
@@ -594,6 +600,28 @@ fn log_range(values: impl Iterator<Item = f64>) -> (f64, f64) {
     }
 }
 
+/// A log axis ticked at 1-2-5 steps (1 per decade when the span is wide),
+/// with light grid lines at the integer multiples of each decade. The
+/// default key points of plotters repeat labels near decade boundaries.
+fn log_axis(lo: f64, hi: f64) -> WithKeyPoints<LogCoord<f64>> {
+    let decade = |m: u32, d: i32| format!("{m}e{d}").parse::<f64>().unwrap_or(f64::NAN);
+    let (d0, d1) = (lo.log10().floor() as i32, hi.log10().ceil() as i32);
+    let mults: &[u32] = if d1 - d0 > 3 { &[1] } else { &[1, 2, 5] };
+    let inside = |v: &f64| *v >= lo && *v <= hi;
+    let bold: Vec<f64> = (d0..=d1)
+        .flat_map(|d| mults.iter().map(move |&m| decade(m, d)))
+        .filter(inside)
+        .collect();
+    let light: Vec<f64> = (d0..=d1)
+        .flat_map(|d| (1..10).map(move |m| decade(m, d)))
+        .filter(inside)
+        .collect();
+    (lo..hi)
+        .log_scale()
+        .with_key_points(bold)
+        .with_light_points(light)
+}
+
 fn log_tick(v: &f64) -> String {
     if (1e-3..1e4).contains(&v.abs()) {
         let s = format!("{v:.3}");
@@ -615,7 +643,7 @@ where
         .margin(20)
         .x_label_area_size(65)
         .y_label_area_size(85)
-        .build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())?;
+        .build_cartesian_2d(log_axis(x0, x1), log_axis(y0, y1))?;
     chart
         .configure_mesh()
         .x_desc("Wall time (s)")

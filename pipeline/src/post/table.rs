@@ -105,7 +105,8 @@ fn csv_number(x: f64) -> String {
     }
 }
 
-/// `x` with `digits` significant digits; scientific outside [1e-3, 1e6).
+/// `x` rounded to `digits` significant digits, trailing zeros dropped;
+/// scientific outside [1e-3, 1e6).
 fn significant(x: f64, digits: usize) -> String {
     if x == 0.0 {
         return "0".into();
@@ -114,11 +115,21 @@ fn significant(x: f64, digits: usize) -> String {
         return format!("{x}");
     }
     let mag = x.abs().log10().floor() as i32;
+    // Trailing zeros only add noise to parameter values such as μ = 0.001.
+    let trim = |s: &str| s.trim_end_matches('0').trim_end_matches('.').to_string();
     if (-3..6).contains(&mag) {
         let decimals = (digits as i32 - 1 - mag).max(0) as usize;
-        format!("{x:.decimals$}")
+        let s = format!("{x:.decimals$}");
+        if s.contains('.') {
+            trim(&s)
+        } else {
+            s
+        }
     } else {
-        format!("{x:.prec$e}", prec = digits - 1)
+        let s = format!("{x:.prec$e}", prec = digits - 1);
+        let (mantissa, exp) = s.split_once('e').unwrap_or((&s, "0"));
+        let mantissa = if mantissa.contains('.') { trim(mantissa) } else { mantissa.to_string() };
+        format!("{mantissa}e{exp}")
     }
 }
 
