@@ -13,42 +13,31 @@ pub enum MeshError {
     /// A quantity of the `mesh` spec section has a bad unit or number.
     #[error(transparent)]
     Unit(#[from] geom::units::UnitError),
-    /// No usable gmsh executable.
-    #[error("gmsh not found: {detail}")]
-    GmshNotFound { detail: String },
-    /// gmsh could not be started.
-    #[error("cannot start gmsh {program}: {source}")]
-    GmshLaunch {
-        program: PathBuf,
-        #[source]
-        source: std::io::Error,
-    },
+    /// gmsh could not be found, checked or started.
+    #[error(transparent)]
+    Gmsh(#[from] geom::gmsh::GmshError),
     /// gmsh ran and failed; `output` holds the end of its messages.
-    #[error("gmsh failed on {geo} ({status}); gmsh said:\n{output}")]
+    #[error("gmsh failed on {geo} ({status}); gmsh said:\n{output}", geo = .geo.display())]
     GmshFailed {
         geo: PathBuf,
         status: String,
         output: String,
     },
     /// gmsh did not finish in time and was killed.
-    #[error("gmsh did not finish meshing {geo} within {seconds} s (mesh.timeout); last messages:\n{output}")]
-    GmshTimeout {
-        geo: PathBuf,
-        seconds: f64,
-        output: String,
-    },
+    #[error("gmsh did not finish meshing {geo} within {seconds} s (mesh.timeout) and was killed", geo = .geo.display())]
+    GmshTimeout { geo: PathBuf, seconds: f64 },
     /// A file could not be read or written.
-    #[error("{path}: {source}")]
+    #[error("{path}: {source}", path = .path.display())]
     Io {
         path: PathBuf,
         #[source]
         source: std::io::Error,
     },
     /// The `.msh` file is truncated or not a valid gmsh 4.1 file.
-    #[error("{path}: corrupt or truncated .msh file: {detail}")]
+    #[error("{path}: corrupt or truncated .msh file: {detail}", path = .path.display())]
     MshCorrupt { path: PathBuf, detail: String },
     /// An element references a node tag that the `$Nodes` section does not define.
-    #[error("{path}: element {element} of {group} references node tag {tag}, which the $Nodes section does not define")]
+    #[error("{path}: element {element} of {group} references node tag {tag}, which the $Nodes section does not define", path = .path.display())]
     BadNodeRef {
         path: PathBuf,
         group: String,
@@ -56,17 +45,17 @@ pub enum MeshError {
         tag: u64,
     },
     /// A physical group the model needs is absent (or has no element of the needed type).
-    #[error("{path}: physical group \"{group}\" is missing (expected {what})")]
+    #[error("{path}: physical group \"{group}\" is missing (expected {what})", path = .path.display())]
     MissingGroup {
         path: PathBuf,
         group: String,
         what: String,
     },
     /// The mesh is not the conforming steel/concrete mesh the model needs.
-    #[error("{path}: {detail}")]
+    #[error("{path}: {detail}", path = .path.display())]
     Topology { path: PathBuf, detail: String },
     /// A model file could not be encoded or decoded.
-    #[error("{path}: model file: {detail}")]
+    #[error("{path}: model file: {detail}", path = .path.display())]
     ModelFile { path: PathBuf, detail: String },
 }
 

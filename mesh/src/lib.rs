@@ -27,7 +27,7 @@ pub mod vtu;
 
 pub use build::{build_model, MeshReport, Timings};
 pub use error::MeshError;
-pub use gmsh_run::{run_gmsh, Gmsh, GmshTiming};
+pub use gmsh_run::{gmsh_args, run_gmsh, Gmsh, GmshTiming};
 pub use model::*;
 pub use read::{read_msh, RawMesh};
 pub use spec::{MeshSpec, RawMeshSpec};
@@ -89,7 +89,7 @@ pub fn mesh_specimen(
     out_dir: &Path,
 ) -> Result<MeshReport, MeshError> {
     std::fs::create_dir_all(out_dir).map_err(|e| MeshError::io(out_dir, e))?;
-    let gmsh_version = gmsh.version()?;
+    let gmsh_version = gmsh.version().to_string();
     let finals: Vec<PathBuf> = [MSH_FILE, MODEL_FILE, VTU_FILE, REPORT_FILE]
         .iter()
         .map(|f| out_dir.join(f))

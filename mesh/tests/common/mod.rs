@@ -26,8 +26,10 @@ pub fn scratch(name: &str) -> PathBuf {
     dir
 }
 
-pub fn gmsh() -> Gmsh {
-    Gmsh::at_default_location()
+/// The gmsh of the test machine (set up by `scripts/setup.sh`), located once.
+pub fn gmsh() -> &'static Gmsh {
+    static G: std::sync::OnceLock<Gmsh> = std::sync::OnceLock::new();
+    G.get_or_init(|| Gmsh::locate().expect("the mesh tests need gmsh (scripts/setup.sh)"))
 }
 
 /// Small sizes: each mesh takes well under a second.
@@ -44,7 +46,7 @@ pub fn small_spec(h_interface: f64) -> MeshSpec {
 /// Meshes `geo` into `dir/out.msh` and returns the path.
 pub fn mesh_file(geo: &Path, spec: &MeshSpec, dir: &Path) -> PathBuf {
     let out = dir.join("out.msh");
-    mesh::run_gmsh(&gmsh(), geo, spec, &out).unwrap();
+    mesh::run_gmsh(gmsh(), geo, spec, &out).unwrap();
     out
 }
 
