@@ -1,0 +1,423 @@
+//! Law-level verification (SPEC §5, STYLE 4): every tangent the solver can ask
+//! for is checked against central finite differences in every regime, one
+//! macro per property; damage monotonicity, the J2 return and finiteness are
+//! checked on pseudo-random paths.
+
+use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
+use solve::laws::coulomb::Coulomb;
+use solve::laws::fczm::Fczm;
+use solve::laws::j2::{von_mises, J2};
+use solve::laws::mazars::{
+    CompressionSoftening, Mazars, MazarsMaterial, MazarsSizeError, TensionSoftening,
+};
+use solve::laws::tvergaard::Tvergaard;
+use solve::laws::{
+    AnyInterfaceLaw, BulkLaw, BulkState, InterfaceLaw, InterfaceState, LawError, TangentKind,
+};
+
+/// Table 2 parameters (paper §3.2) with ζ = 1, γ = −1 MPa.
+fn fczm() -> Fczm {
+    Fczm {
+        tensile_strength: 3e6,
+        fracture_energy: 300.0,
+        lambda0: 2e-5,
+        delta_s: 1.0,
+        friction: 0.4,
+        zeta: 1.0,
+        gamma: -1e6,
+        min_damage: 0.0,
+    }
+}
+
+/// Table 3 R1-like parameters with δ_s ≠ 1 and ζ = 8, to exercise the ratios.
+fn fczm_calibrated() -> Fczm {
+    Fczm { tensile_strength: 2.16e6, fracture_energy: 97.0, lambda0: 5e-5, delta_s: 0.16, friction: 0.3, zeta: 8.0, ..fczm() }
+}
+
+fn tvergaard() -> Tvergaard {
+    Tvergaard { tensile_strength: 3e6, fracture_energy: 200.0, lambda0: 1e-5, delta_s: 0.5 }
+}
+
+/// Appendix B parameters.
+fn coulomb() -> Coulomb {
+    Coulomb {
+        normal_stiffness: 1e11,
+        shear_stiffness: 1e11,
+        tensile_strength: 3e6,
+        cohesion: 3e6,
+        friction_angle: 45f64.to_radians(),
+    }
+}
+
+/// Fig. 4b concrete at l = 1 mm, Table 1 compression from eqs. (12)–(13).
+fn mazars() -> Mazars {
+    MazarsMaterial {
+        young_modulus: 30e9,
+        poisson_ratio: 0.2,
+        eps_d0: 1e-4,
+        shear_exponent: 1.06,
+        tension: TensionSoftening::Regularised { fracture_energy: 80.0 },
+        compression: CompressionSoftening::SizeFit,
+    }
+    .at_size(1e-3)
+    .unwrap()
+}
+
+fn j2() -> J2 {
+    J2::default()
+}
+
+/// Commits the law along `history` from the virgin state.
+fn interface_history(law: &dyn InterfaceLaw, history: &[[f64; 3]]) -> InterfaceState {
+    history.iter().fold(InterfaceState::default(), |s, u| {
+        law.step(&s, &Vector3::from(*u), TangentKind::Consistent).unwrap().state
+    })
+}
+
+fn bulk_history(law: &dyn BulkLaw, history: &[[f64; 6]]) -> BulkState {
+    history.iter().fold(BulkState::default(), |s, e| {
+        law.step(&s, &Vector6::from(*e), TangentKind::Consistent).unwrap().state
+    })
+}
+
+/// Central differences of the traction at fixed committed state.
+fn fd_interface(law: &dyn InterfaceLaw, st: &InterfaceState, u: &Vector3<f64>, h: f64) -> Matrix3<f64> {
+    let mut k = Matrix3::zeros();
+    for j in 0..3 {
+        let (mut p, mut m) = (*u, *u);
+        p[j] += h;
+        m[j] -= h;
+        let tp = law.step(st, &p, TangentKind::Consistent).unwrap().traction;
+        let tm = law.step(st, &m, TangentKind::Consistent).unwrap().traction;
+        k.set_column(j, &((tp - tm) / (2.0 * h)));
+    }
+    k
+}
+
+fn fd_bulk(law: &dyn BulkLaw, st: &BulkState, e: &Vector6<f64>, h: f64) -> Matrix6<f64> {
+    let mut k = Matrix6::zeros();
+    for j in 0..6 {
+        let (mut p, mut m) = (*e, *e);
+        p[j] += h;
+        m[j] -= h;
+        let sp = law.step(st, &p, TangentKind::Consistent).unwrap().stress;
+        let sm = law.step(st, &m, TangentKind::Consistent).unwrap().stress;
+        k.set_column(j, &((sp - sm) / (2.0 * h)));
+    }
+    k
+}
+
+/// Consistent tangent of an interface law equals central differences of the traction
+/// at `at` after `history`, and the step is in the regime `regime(before, after)` says.
+macro_rules! interface_tangent {
+    ($name:ident, $doc:literal, $law:expr, history: $hist:expr, at: $u:expr, regime: $regime:expr) => {
+        #[doc = $doc]
+        #[test]
+        fn $name() {
+            let law = $law;
+            let st = interface_history(&law, &$hist);
+            let u = Vector3::from($u);
+            let r = law.step(&st, &u, TangentKind::Consistent).unwrap();
+            let regime: fn(&InterfaceState, &InterfaceState) -> bool = $regime;
+            assert!(regime(&st, &r.state), "not in the intended regime: {st:?} -> {:?}", r.state);
+            let h = 1e-6 * u.amax();
+            let fd = fd_interface(&law, &st, &u, h);
+            let err = (fd - r.tangent).amax();
+            assert!(err <= 1e-5 * r.tangent.amax(), "tangent\n{}vs finite differences\n{}", r.tangent, fd);
+            // The secant reproduces the traction when it is a true secant (no slip history).
+            assert!(law.step(&st, &u, TangentKind::Secant).unwrap().tangent.iter().all(|v| v.is_finite()));
+        }
+    };
+}
+
+macro_rules! bulk_tangent {
+    ($name:ident, $doc:literal, $law:expr, history: $hist:expr, at: $e:expr, regime: $regime:expr) => {
+        #[doc = $doc]
+        #[test]
+        fn $name() {
+            let law = $law;
+            let st = bulk_history(&law, &$hist);
+            let e = Vector6::from($e);
+            let r = law.step(&st, &e, TangentKind::Consistent).unwrap();
+            let regime: fn(&BulkState, &BulkState) -> bool = $regime;
+            assert!(regime(&st, &r.state), "not in the intended regime: {st:?} -> {:?}", r.state);
+            let h = 1e-6 * e.amax();
+            let fd = fd_bulk(&law, &st, &e, h);
+            let err = (fd - r.tangent).amax();
+            assert!(err <= 1e-5 * r.tangent.amax(), "tangent\n{}vs finite differences\n{}", r.tangent, fd);
+        }
+    };
+}
+
+/// Undamaged; in FCZM the (zero-weight) damaged part may still slide.
+fn undamaged_i(_: &InterfaceState, b: &InterfaceState) -> bool {
+    b.damage == 0.0
+}
+fn elastic_i(a: &InterfaceState, b: &InterfaceState) -> bool {
+    b.damage == 0.0 && a.slip == b.slip
+}
+fn loading_i(a: &InterfaceState, b: &InterfaceState) -> bool {
+    b.lambda_max > a.lambda_max
+}
+fn unloading_i(a: &InterfaceState, b: &InterfaceState) -> bool {
+    a.damage > 0.0 && b.lambda_max == a.lambda_max
+}
+fn sticking_i(a: &InterfaceState, b: &InterfaceState) -> bool {
+    a.damage > 0.0 && b.slip == a.slip
+}
+fn sliding_loading_i(a: &InterfaceState, b: &InterfaceState) -> bool {
+    b.slip != a.slip && b.lambda_max > a.lambda_max
+}
+fn sliding_unloading_i(a: &InterfaceState, b: &InterfaceState) -> bool {
+    b.slip != a.slip && b.lambda_max == a.lambda_max && a.damage > 0.0
+}
+fn sliding_i(a: &InterfaceState, b: &InterfaceState) -> bool {
+    b.slip != a.slip
+}
+
+// FCZM (eqs. 15–26).
+interface_tangent!(fczm_tangent_elastic, "FCZM consistent tangent matches finite differences below λ_0 (eq. A.5; SPEC §5).",
+    fczm(), history: [], at: [5e-6, 3e-6, -2e-6], regime: undamaged_i);
+interface_tangent!(fczm_tangent_tension_loading, "FCZM consistent tangent matches finite differences in opening-and-shear loading (eqs. 22–26).",
+    fczm(), history: [], at: [4e-5, 1e-5, 5e-6], regime: loading_i);
+interface_tangent!(fczm_tangent_tension_loading_calibrated, "FCZM consistent tangent matches finite differences in loading with δ_s ≠ 1 and ζ = 8 (Table 3).",
+    fczm_calibrated(), history: [], at: [4e-5, 3e-5, -1e-5], regime: loading_i);
+interface_tangent!(fczm_tangent_tension_unloading, "FCZM consistent (secant) tangent matches finite differences in tension unloading (SPEC §5 reading of λ).",
+    fczm(), history: [[8e-5, 2e-5, 0.0]], at: [4e-5, 1e-5, 0.0], regime: unloading_i);
+interface_tangent!(fczm_tangent_compression_sticking_loading, "FCZM consistent tangent matches finite differences under σ_N = −20 MPa while sticking and damaging (eqs. 19–26).",
+    fczm(), history: [[-1.3333e-4, 0.0, 0.0]], at: [-1.3333e-4, 3e-5, 4e-6], regime: |a, b| b.slip == a.slip && b.lambda_max > a.lambda_max);
+interface_tangent!(fczm_tangent_compression_sticking_unloading, "FCZM consistent tangent matches finite differences when sticking after a slip reversal under compression (eq. 21).",
+    fczm(), history: [[-3.3333e-5, 6e-5, 0.0]], at: [-3.3333e-5, 5.9e-5, 0.0], regime: sticking_i);
+interface_tangent!(fczm_tangent_compression_sliding_loading, "FCZM consistent tangent matches finite differences when sliding and damaging with σ_dn ≤ γ (eqs. 19–21, fourth case of 26).",
+    fczm(), history: [[-3.3333e-5, 4e-5, 0.0]], at: [-3.3333e-5, 6e-5, 1e-5], regime: sliding_loading_i);
+interface_tangent!(fczm_tangent_compression_band_sliding, "FCZM consistent tangent matches finite differences when sliding and damaging with γ < σ_dn < 0 (third case of 26, SPEC §5 reading).",
+    fczm(), history: [[-3.3333e-6, 3e-5, 0.0]], at: [-3.3333e-6, 4e-5, 5e-6], regime: sliding_loading_i);
+interface_tangent!(fczm_tangent_compression_sliding_unloading, "FCZM consistent tangent matches finite differences when sliding back without damage growth (eqs. 19–21).",
+    fczm(), history: [[-3.3333e-5, 6e-5, 0.0]], at: [-3.3333e-5, 3e-5, 0.0], regime: sliding_unloading_i);
+interface_tangent!(fczm_tangent_pure_compression, "FCZM consistent tangent is K_n in undamaged compression (eqs. 17, 25).",
+    fczm(), history: [], at: [-2e-5, 0.0, 0.0], regime: elastic_i);
+
+// Tvergaard (App. A).
+interface_tangent!(tvergaard_tangent_elastic, "Tvergaard consistent tangent matches finite differences below λ_0 (A.5).",
+    tvergaard(), history: [], at: [4e-6, 2e-6, 1e-6], regime: elastic_i);
+interface_tangent!(tvergaard_tangent_loading, "Tvergaard consistent tangent matches finite differences in mixed-mode loading (A.9–A.11).",
+    tvergaard(), history: [], at: [3e-5, 1e-5, -5e-6], regime: loading_i);
+interface_tangent!(tvergaard_tangent_unloading, "Tvergaard consistent (secant) tangent matches finite differences in unloading (A.6, A.8).",
+    tvergaard(), history: [[5e-5, 1e-5, 0.0]], at: [2e-5, 5e-6, 1e-6], regime: unloading_i);
+interface_tangent!(tvergaard_tangent_compression_shear_loading, "Tvergaard consistent tangent matches finite differences in compression with shear loading (A.10–A.11).",
+    tvergaard(), history: [], at: [-1e-5, 3e-5, 1e-5], regime: loading_i);
+
+// Coulomb (App. B).
+interface_tangent!(coulomb_tangent_sticking, "Coulomb consistent tangent is the elastic stiffness while sticking (A.5, App. B).",
+    coulomb(), history: [], at: [-5e-5, 2e-5, 1e-5], regime: elastic_i);
+interface_tangent!(coulomb_tangent_sliding_compression, "Coulomb consistent tangent matches finite differences when sliding under compression (B.1).",
+    coulomb(), history: [], at: [-5e-5, 1e-4, 3e-5], regime: sliding_i);
+interface_tangent!(coulomb_tangent_sliding_tension, "Coulomb consistent tangent matches finite differences when sliding under tension below f_t (B.1–B.2).",
+    coulomb(), history: [], at: [1e-5, 1e-4, 0.0], regime: sliding_i);
+interface_tangent!(coulomb_tangent_separated_sliding, "Coulomb consistent tangent matches finite differences when sliding in frictional contact after separation (App. B).",
+    coulomb(), history: [[5e-5, 0.0, 0.0]], at: [-2e-5, 1e-4, 1e-5], regime: |a, b| a.damage == 1.0 && b.slip != a.slip);
+
+fn elastic_b(a: &BulkState, b: &BulkState) -> bool {
+    b.damage == a.damage && b.plastic_strain == a.plastic_strain
+}
+fn damaging_b(a: &BulkState, b: &BulkState) -> bool {
+    b.damage > a.damage
+}
+fn unloading_b(a: &BulkState, b: &BulkState) -> bool {
+    a.damage > 0.0 && b.damage == a.damage
+}
+fn yielding_b(a: &BulkState, b: &BulkState) -> bool {
+    b.plastic_strain != a.plastic_strain
+}
+
+// Mazars (eqs. 1–9).
+bulk_tangent!(mazars_tangent_elastic, "Mazars consistent tangent is C below ε_D0 (eq. 1).",
+    mazars(), history: [], at: [5e-5, -1e-5, -1e-5, 2e-5, 0.0, 0.0], regime: elastic_b);
+bulk_tangent!(mazars_tangent_tension_loading, "Mazars consistent tangent matches finite differences in tension loading, all effective principal stresses positive (eqs. 3, 9).",
+    mazars(), history: [], at: [3e-4, -4e-5, -5e-5, 0.0, 0.0, 0.0], regime: damaging_b);
+bulk_tangent!(mazars_tangent_mixed_loading, "Mazars consistent tangent matches finite differences in mixed tension–compression loading with 0 < α_t < 1 (eqs. 4–7).",
+    mazars(), history: [], at: [3e-4, -8e-4, 0.0, 1e-4, 0.0, 0.0], regime: damaging_b);
+bulk_tangent!(mazars_tangent_shear_loading, "Mazars consistent tangent matches finite differences in general shear-dominated loading (eqs. 3–7).",
+    mazars(), history: [], at: [1e-4, -5e-5, 2e-5, 4e-4, -1e-4, 5e-5], regime: damaging_b);
+bulk_tangent!(mazars_tangent_compression_loading, "Mazars consistent tangent matches finite differences in compression loading (eqs. 5, 12–13).",
+    mazars(), history: [], at: [-2e-3, 3.5e-4, 3.5e-4, 1e-4, 0.0, 0.0], regime: damaging_b);
+bulk_tangent!(mazars_tangent_unloading, "Mazars consistent tangent is the secant (1 − D)C in unloading (eq. 1, damage never decreases).",
+    mazars(), history: [[5e-4, -1e-4, -1e-4, 0.0, 0.0, 0.0]], at: [2e-4, -4e-5, -4e-5, 0.0, 0.0, 0.0], regime: unloading_b);
+
+// J2 (radial return).
+bulk_tangent!(j2_tangent_elastic, "J2 consistent tangent is C inside the yield surface.",
+    j2(), history: [], at: [5e-4, -1e-4, 0.0, 2e-4, 0.0, 0.0], regime: elastic_b);
+bulk_tangent!(j2_tangent_yielding, "J2 consistent tangent matches finite differences while yielding (radial return, perfect plasticity).",
+    j2(), history: [], at: [4e-3, -1e-3, -5e-4, 1e-3, 2e-4, -3e-4], regime: yielding_b);
+bulk_tangent!(j2_tangent_reverse_yielding, "J2 consistent tangent matches finite differences while yielding in reverse after plastic flow.",
+    j2(), history: [[4e-3, -1.2e-3, -1.2e-3, 0.0, 0.0, 0.0]], at: [-2e-3, 1e-4, 2e-4, 1e-3, 0.0, 0.0], regime: yielding_b);
+bulk_tangent!(j2_tangent_unloading, "J2 consistent tangent is C in elastic unloading from a plastic state.",
+    j2(), history: [[4e-3, -1.2e-3, -1.2e-3, 0.0, 0.0, 0.0]], at: [3.5e-3, -1.2e-3, -1.2e-3, 0.0, 0.0, 0.0], regime: elastic_b);
+
+/// Deterministic pseudo-random numbers in [−1, 1) for path tests.
+struct Lcg(u64);
+impl Lcg {
+    fn next(&mut self) -> f64 {
+        self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        ((self.0 >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+    }
+}
+
+/// Damage (and λ̃, κ) never decreases along random interface paths (SPEC §5).
+#[test]
+fn interface_damage_never_decreases() {
+    let laws = [
+        AnyInterfaceLaw::Fczm(fczm()),
+        AnyInterfaceLaw::Fczm(fczm_calibrated()),
+        AnyInterfaceLaw::Tvergaard(tvergaard()),
+        AnyInterfaceLaw::Coulomb(coulomb()),
+    ];
+    let mut rng = Lcg(7);
+    for law in laws {
+        let mut st = InterfaceState::default();
+        let mut u = Vector3::zeros();
+        for _ in 0..400 {
+            u += Vector3::new(rng.next(), rng.next(), rng.next()) * 1e-5;
+            let r = law.step(&st, &u, TangentKind::Consistent).unwrap();
+            assert!(r.state.damage >= st.damage && r.state.lambda_max >= st.lambda_max, "{law:?}");
+            assert!((0.0..=1.0).contains(&r.state.damage));
+            st = r.state;
+        }
+    }
+}
+
+/// Mazars damage never decreases along random strain paths (SPEC §5).
+#[test]
+fn mazars_damage_never_decreases() {
+    let law = mazars();
+    let mut rng = Lcg(11);
+    let mut st = BulkState::default();
+    let mut e = Vector6::zeros();
+    for _ in 0..400 {
+        e += Vector6::from_fn(|_, _| rng.next()) * 1e-4;
+        let r = law.step(&st, &e, TangentKind::Consistent).unwrap();
+        assert!(r.state.damage >= st.damage && r.state.kappa >= st.kappa);
+        assert!((0.0..=1.0).contains(&r.state.damage));
+        st = r.state;
+    }
+    assert!(st.damage > 0.5, "the path should have damaged the point, D = {}", st.damage);
+}
+
+/// J2 radial return lands on the yield surface whenever it flows, and stays inside otherwise (SPEC §5).
+#[test]
+fn j2_returns_onto_the_yield_surface() {
+    let law = j2();
+    let mut rng = Lcg(3);
+    let mut st = BulkState::default();
+    let mut e = Vector6::zeros();
+    let mut flowed = 0;
+    for _ in 0..400 {
+        e += Vector6::from_fn(|_, _| rng.next()) * 1e-3;
+        let r = law.step(&st, &e, TangentKind::Consistent).unwrap();
+        let vm = von_mises(&r.stress);
+        if r.state.plastic_strain != st.plastic_strain {
+            flowed += 1;
+            assert!((vm - 365e6).abs() <= 1e-9 * 365e6, "von Mises {vm}");
+            // Plastic flow is isochoric.
+            let p = &r.state.plastic_strain;
+            assert!((p[0] + p[1] + p[2]).abs() <= 1e-12);
+        } else {
+            assert!(vm <= 365e6 * (1.0 + 1e-12));
+        }
+        st = r.state;
+    }
+    assert!(flowed > 50);
+}
+
+/// A law never returns NaN or infinity for finite input: it returns a `LawError` (SPEC §5, issue 4).
+#[test]
+fn laws_return_errors_not_nan() {
+    let interfaces = [
+        AnyInterfaceLaw::Fczm(fczm()),
+        AnyInterfaceLaw::Tvergaard(tvergaard()),
+        AnyInterfaceLaw::Coulomb(coulomb()),
+        AnyInterfaceLaw::contact(1e11),
+    ];
+    let extremes = [1e300, -1e300, 1e-300, 0.0, 1e150, -1e150];
+    for law in interfaces {
+        for &a in &extremes {
+            for &b in &extremes {
+                for kind in [TangentKind::Elastic, TangentKind::Secant, TangentKind::Consistent] {
+                    match law.step(&InterfaceState::default(), &Vector3::new(a, b, -b), kind) {
+                        Ok(r) => assert!(r.traction.iter().chain(r.tangent.iter()).all(|v| v.is_finite())),
+                        Err(e) => assert!(matches!(e, LawError::NonFiniteResult { .. })),
+                    }
+                }
+            }
+        }
+        let err = law.step(&InterfaceState::default(), &Vector3::new(f64::NAN, 0.0, 0.0), TangentKind::Consistent);
+        assert!(matches!(err, Err(LawError::NonFiniteInput { .. })));
+    }
+    let bulks: [&dyn BulkLaw; 2] = [&mazars(), &j2()];
+    for law in bulks {
+        for &a in &extremes {
+            for &b in &extremes {
+                let e = Vector6::new(a, b, -a, b, 0.0, a);
+                match law.step(&BulkState::default(), &e, TangentKind::Consistent) {
+                    Ok(r) => assert!(r.stress.iter().chain(r.tangent.iter()).all(|v| v.is_finite())),
+                    Err(e) => assert!(matches!(e, LawError::NonFiniteResult { .. })),
+                }
+            }
+        }
+        let e = Vector6::new(f64::INFINITY, 0.0, 0.0, 0.0, 0.0, 0.0);
+        assert!(matches!(law.step(&BulkState::default(), &e, TangentKind::Consistent), Err(LawError::NonFiniteInput { .. })));
+    }
+}
+
+/// The non-adhesive contact option carries no tension and no shear, and K_n u_n in compression (SPEC §2).
+#[test]
+fn contact_is_no_tension_frictionless() {
+    let law = AnyInterfaceLaw::contact(4e10);
+    let st = InterfaceState::default();
+    let open = law.step(&st, &Vector3::new(1e-4, 2e-4, -1e-4), TangentKind::Consistent).unwrap();
+    assert_eq!(open.traction, Vector3::zeros());
+    let closed = law.step(&st, &Vector3::new(-1e-5, 2e-4, 3e-4), TangentKind::Consistent).unwrap();
+    assert!((closed.traction[0] + 4e10 * 1e-5).abs() < 1e-6);
+    assert_eq!(closed.traction[1], 0.0);
+    assert_eq!(closed.traction[2], 0.0);
+    assert_eq!(closed.state.damage, 1.0);
+}
+
+/// Hillerborg's B_t follows the energy balance G_f = l (E ε_D0²/2 + E ε_D0/B_t), and too large an element is an error naming the limit (eq. 10 as read in SPEC §5).
+#[test]
+fn mazars_size_regularisation() {
+    let m = MazarsMaterial {
+        young_modulus: 30e9,
+        poisson_ratio: 0.2,
+        eps_d0: 1e-4,
+        shear_exponent: 1.06,
+        tension: TensionSoftening::Regularised { fracture_energy: 80.0 },
+        compression: CompressionSoftening::SizeFit,
+    };
+    for l in [0.2e-3, 1e-3, 5e-3] {
+        let law = m.at_size(l).unwrap();
+        let solve::laws::mazars::TensionBranch::Exponential { b_t } = law.tension else { panic!() };
+        let gf = l * (30e9 * 1e-8 / 2.0 + 30e9 * 1e-4 / b_t);
+        assert!((gf - 80.0).abs() < 1e-9 * 80.0);
+    }
+    // l_max = 2 G_f / (E ε_D0²) = 0.5333 m.
+    let err = m.at_size(0.6).unwrap_err();
+    assert!(matches!(err, MazarsSizeError::TooLarge { .. }));
+    assert!(err.to_string().contains("too large") && err.to_string().contains("0.5333"), "{err}");
+    assert!(matches!(m.at_size(1e-6), Err(MazarsSizeError::OutsideFit { .. })));
+    assert!(matches!(m.at_size(-1.0), Err(MazarsSizeError::BadSize { .. })));
+}
+
+/// Secant tangents are what the docs say: (1 − D)C for Mazars, σ = K_sec u for Tvergaard (docs/laws.md).
+#[test]
+fn secant_tangents() {
+    let law = mazars();
+    let e = Vector6::new(5e-4, -1e-4, -1e-4, 0.0, 0.0, 0.0);
+    let r = law.step(&BulkState::default(), &e, TangentKind::Secant).unwrap();
+    assert!((r.tangent - law.stiffness() * (1.0 - r.state.damage)).amax() < 1e-6);
+    assert!((r.tangent * e - r.stress).amax() < 1e-6);
+    let t = tvergaard();
+    let u = Vector3::new(3e-5, -2e-5, 1e-5);
+    let r = t.step(&InterfaceState::default(), &u, TangentKind::Secant).unwrap();
+    assert!((r.tangent * u - r.traction).amax() < 1e-6);
+}
