@@ -54,7 +54,10 @@ fn manufactured_non_constant_ratio_four_grids() {
         // Deliberately unsorted input.
         let h = [0.9e-3, 0.4e-3, 1.6e-3, 0.55e-3];
         let s = convergence_study("peak", &grids(&h, f)).unwrap();
-        assert_eq!(s.grids.iter().map(|g| g.h).collect::<Vec<_>>(), vec![0.4e-3, 0.55e-3, 0.9e-3, 1.6e-3]);
+        assert_eq!(
+            s.grids.iter().map(|g| g.h).collect::<Vec<_>>(),
+            vec![0.4e-3, 0.55e-3, 0.9e-3, 1.6e-3]
+        );
         assert_eq!(s.triplets.len(), 2);
         for t in &s.triplets {
             assert_eq!(t.kind, ConvergenceKind::Monotonic, "{t:?}");
@@ -117,12 +120,19 @@ fn classifies_non_monotone_series() {
     // Oscillation that grows under refinement: no positive order exists.
     let t = three_grid_estimate(h, [1.0, 1.4, 1.2]).unwrap();
     assert_eq!(t.kind, ConvergenceKind::Oscillatory);
-    assert_eq!((t.order, t.extrapolated, t.gci_fine), (None, None, None), "{t:?}");
+    assert_eq!(
+        (t.order, t.extrapolated, t.gci_fine),
+        (None, None, None),
+        "{t:?}"
+    );
 
     // Differences grow as h shrinks: divergent, nothing extrapolated.
     let t = three_grid_estimate(h, [1.0, 1.5, 1.75]).unwrap();
     assert_eq!(t.kind, ConvergenceKind::Divergent);
-    assert_eq!((t.order, t.extrapolated, t.gci_fine, t.extrap_rel_error), (None, None, None, None));
+    assert_eq!(
+        (t.order, t.extrapolated, t.gci_fine, t.extrap_rel_error),
+        (None, None, None, None)
+    );
     assert!(t.approx_rel_error.is_some());
 
     let t = three_grid_estimate(h, [2.0, 2.0, 2.0]).unwrap();
@@ -163,13 +173,25 @@ fn rows_of_a_four_grid_study() {
 /// Unusable series are refused with the quantity named.
 #[test]
 fn refuses_bad_series() {
-    let ok = |h: f64, v: f64| GridResult { h, value: v, dofs: None, wall_time: None };
+    let ok = |h: f64, v: f64| GridResult {
+        h,
+        value: v,
+        dofs: None,
+        wall_time: None,
+    };
     let cases = [
         vec![ok(1e-3, 1.0), ok(2e-3, 2.0)],
         vec![ok(1e-3, 1.0), ok(1e-3, 2.0), ok(2e-3, 3.0)],
         vec![ok(1e-3, 1.0), ok(2e-3, f64::NAN), ok(4e-3, 3.0)],
         vec![ok(-1e-3, 1.0), ok(2e-3, 2.0), ok(4e-3, 3.0)],
-        vec![ok(1e-3, 1.0), ok(2e-3, 2.0), GridResult { wall_time: Some(-1.0), ..ok(4e-3, 3.0) }],
+        vec![
+            ok(1e-3, 1.0),
+            ok(2e-3, 2.0),
+            GridResult {
+                wall_time: Some(-1.0),
+                ..ok(4e-3, 3.0)
+            },
+        ],
     ];
     for grids in cases {
         let e = convergence_study("fed_at_peak_mm", &grids).unwrap_err();

@@ -9,7 +9,9 @@ use pipeline::post::{
 use std::path::{Path, PathBuf};
 
 fn scratch(name: &str) -> PathBuf {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("post_plots").join(name);
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join("post_plots")
+        .join(name);
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     dir
@@ -23,7 +25,11 @@ fn curve(peak_mpa: f64, s0_mm: f64, residual: f64, n: usize) -> Vec<CurveRow> {
             let x = s / s0_mm;
             let shape = x * (1.0 - x).exp();
             // Rises to the peak at s0, then softens towards a residual level.
-            let sigma = if x <= 1.0 { peak_mpa * shape } else { peak_mpa * (residual + (1.0 - residual) * shape) };
+            let sigma = if x <= 1.0 {
+                peak_mpa * shape
+            } else {
+                peak_mpa * (residual + (1.0 - residual) * shape)
+            };
             CurveRow::new(i as u64, 0.0, 0.0, s * 1e-3, sigma * 1e6, 3)
         })
         .collect()
@@ -32,7 +38,12 @@ fn curve(peak_mpa: f64, s0_mm: f64, residual: f64, n: usize) -> Vec<CurveRow> {
 /// Checks a PNG's signature and the image size in its IHDR chunk.
 fn assert_png(path: &Path, size: (u32, u32)) {
     let bytes = std::fs::read(path).unwrap();
-    assert!(bytes.len() > 5_000, "{} is only {} bytes", path.display(), bytes.len());
+    assert!(
+        bytes.len() > 5_000,
+        "{} is only {} bytes",
+        path.display(),
+        bytes.len()
+    );
     assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n", "{}", path.display());
     assert_eq!(&bytes[12..16], b"IHDR");
     let w = u32::from_be_bytes(bytes[16..20].try_into().unwrap());
@@ -44,7 +55,11 @@ fn assert_png(path: &Path, size: (u32, u32)) {
 fn assert_svg(path: &Path, texts: &[&str]) -> String {
     let text = std::fs::read_to_string(path).unwrap();
     let start = text.trim_start();
-    assert!(start.starts_with("<svg") || start.starts_with("<?xml"), "{}", &text[..80.min(text.len())]);
+    assert!(
+        start.starts_with("<svg") || start.starts_with("<?xml"),
+        "{}",
+        &text[..80.min(text.len())]
+    );
     assert!(text.contains("<svg") && text.trim_end().ends_with("</svg>"));
     for t in texts {
         assert!(text.contains(t), "{} lacks `{t}`", path.display());
@@ -61,14 +76,31 @@ fn bond_slip_plots_written() {
     let b = curve(6.5, 0.25, 0.2, 60);
     let c = curve(4.0, 0.4, 0.1, 25);
 
-    let (png, svg) = (dir.join("one/plots/bond_slip.png"), dir.join("one/plots/bond_slip.svg"));
+    let (png, svg) = (
+        dir.join("one/plots/bond_slip.png"),
+        dir.join("one/plots/bond_slip.svg"),
+    );
     bond_slip_plot(&[("R1 coarse", &a)], &png, &svg).unwrap();
     assert_png(&png, (900, 650));
-    let text = assert_svg(&svg, &["Free-end displacement FED (mm)", "Mean bond stress σ_mb (MPa)"]);
-    assert!(!text.contains("R1 coarse"), "a single curve needs no legend");
+    let text = assert_svg(
+        &svg,
+        &[
+            "Free-end displacement FED (mm)",
+            "Mean bond stress σ_mb (MPa)",
+        ],
+    );
+    assert!(
+        !text.contains("R1 coarse"),
+        "a single curve needs no legend"
+    );
 
     let (png, svg) = (dir.join("study.png"), dir.join("study.svg"));
-    bond_slip_plot(&[("δs = 0.02", &a), ("δs = 0.16", &b), ("δs = 1.0", &c)], &png, &svg).unwrap();
+    bond_slip_plot(
+        &[("δs = 0.02", &a), ("δs = 0.16", &b), ("δs = 1.0", &c)],
+        &png,
+        &svg,
+    )
+    .unwrap();
     assert_png(&png, (900, 650));
     assert_svg(&svg, &["δs = 0.02", "δs = 0.16", "δs = 1.0"]);
     // No temporary files are left beside the results.
@@ -109,7 +141,12 @@ fn interface_line_plot_written() {
     assert_png(&png, (1400, 600));
     assert_svg(
         &svg,
-        &["Normal traction t_n (MPa)", "Shear traction t_t (MPa)", "Position along the bar z (mm)", "FED = 0.5 mm"],
+        &[
+            "Normal traction t_n (MPa)",
+            "Shear traction t_t (MPa)",
+            "Position along the bar z (mm)",
+            "FED = 0.5 mm",
+        ],
     );
 }
 
@@ -141,7 +178,10 @@ fn error_vs_time_plot_written() {
     let (png, svg) = (dir.join("err.png"), dir.join("err.svg"));
     error_vs_time_plot(&series, &png, &svg).unwrap();
     assert_png(&png, (900, 650));
-    assert_svg(&svg, &["Wall time (s)", "Relative error", "peak σ_mb", "energy"]);
+    assert_svg(
+        &svg,
+        &["Wall time (s)", "Relative error", "peak σ_mb", "energy"],
+    );
 }
 
 /// Plots refuse empty or non-finite input with a typed error instead of
@@ -155,7 +195,10 @@ fn plots_refuse_bad_input() {
     let nan = vec![CurveRow::new(1, 0.0, 0.0, 1e-4, f64::NAN, 1)];
     let e = bond_slip_plot(&[("bad case", &nan)], &png, &svg).unwrap_err();
     assert!(e.to_string().contains("bad case"), "{e}");
-    let zero = [ErrorTimeSeries { label: "q".into(), points: vec![(1.0, 0.0), (0.0, 0.1)] }];
+    let zero = [ErrorTimeSeries {
+        label: "q".into(),
+        points: vec![(1.0, 0.0), (0.0, 0.1)],
+    }];
     assert!(error_vs_time_plot(&zero, &png, &svg).is_err());
     assert!(interface_line_plot(&[], &png, &svg).is_err());
     assert!(!png.exists() && !svg.exists());
@@ -166,7 +209,15 @@ fn plots_refuse_bad_input() {
 #[test]
 fn font_found_or_explained() {
     let path = ensure_font().unwrap();
-    assert!(path.extension().is_some_and(|e| e.eq_ignore_ascii_case("ttf")), "{}", path.display());
-    let msg = PostError::FontNotFound { searched: "/usr/share/fonts".into() }.to_string();
+    assert!(
+        path.extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("ttf")),
+        "{}",
+        path.display()
+    );
+    let msg = PostError::FontNotFound {
+        searched: "/usr/share/fonts".into(),
+    }
+    .to_string();
     assert!(msg.contains("fonts-dejavu-core"), "{msg}");
 }

@@ -2,13 +2,15 @@
 //! (SPEC §7 outputs; issue 6 "summary.json").
 
 use pipeline::post::{
-    energy_to_fed, parse_curve_csv, peak_bond_stress, read_curve_csv, residual_bond_stress,
-    summarize, CurveRow, PostError, SummaryOptions,
+    curve_distance, energy_to_fed, parse_curve_csv, peak_bond_stress, read_curve_csv,
+    residual_bond_stress, summarize, CurveAxis, CurveRow, PostError, SummaryOptions,
 };
 use std::path::{Path, PathBuf};
 
 fn scratch(name: &str) -> PathBuf {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("post_summary").join(name);
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join("post_summary")
+        .join(name);
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     dir
@@ -19,7 +21,16 @@ fn rows_mm_mpa(points: &[(f64, f64)]) -> Vec<CurveRow> {
     points
         .iter()
         .enumerate()
-        .map(|(i, &(fed, s))| CurveRow::new(i as u64 + 1, 2.0 * fed * 1e-3, s * 1e3, fed * 1e-3, s * 1e6, 3))
+        .map(|(i, &(fed, s))| {
+            CurveRow::new(
+                i as u64 + 1,
+                2.0 * fed * 1e-3,
+                s * 1e3,
+                fed * 1e-3,
+                s * 1e6,
+                3,
+            )
+        })
         .collect()
 }
 
@@ -67,23 +78,53 @@ fn csv_errors_name_file_and_line() {
 
     let e = parse_curve_csv(&format!("{header}1,0,0,0,0,1\n2,0,0,abc,0,1\n"), p).unwrap_err();
     let msg = e.to_string();
-    assert!(matches!(e, PostError::BadValue { line: 3, column: "fed", .. }), "{msg}");
-    assert!(msg.contains("runs/a/curve.csv:3") && msg.contains("abc"), "{msg}");
+    assert!(
+        matches!(
+            e,
+            PostError::BadValue {
+                line: 3,
+                column: "fed",
+                ..
+            }
+        ),
+        "{msg}"
+    );
+    assert!(
+        msg.contains("runs/a/curve.csv:3") && msg.contains("abc"),
+        "{msg}"
+    );
 
     let e = parse_curve_csv(&format!("{header}1,0,0,NaN,0,1\n"), p).unwrap_err();
     assert!(matches!(e, PostError::BadValue { line: 2, .. }), "{e}");
 
     let e = parse_curve_csv(&format!("{header}1,0,0,0,0\n"), p).unwrap_err();
-    assert!(matches!(e, PostError::FieldCount { line: 2, expected: 6, found: 5, .. }), "{e}");
+    assert!(
+        matches!(
+            e,
+            PostError::FieldCount {
+                line: 2,
+                expected: 6,
+                found: 5,
+                ..
+            }
+        ),
+        "{e}"
+    );
 
     let e = parse_curve_csv("step,u_imposed,force,bond_stress,iterations\n", p).unwrap_err();
-    assert!(matches!(e, PostError::MissingColumn { column: "fed", .. }), "{e}");
+    assert!(
+        matches!(e, PostError::MissingColumn { column: "fed", .. }),
+        "{e}"
+    );
 
     let e = parse_curve_csv(header, p).unwrap_err();
     assert!(matches!(e, PostError::EmptyCsv { .. }), "{e}");
 
     let e = parse_curve_csv(&format!("{header}-1,0,0,0,0,1\n"), p).unwrap_err();
-    assert!(matches!(e, PostError::BadValue { column: "step", .. }), "{e}");
+    assert!(
+        matches!(e, PostError::BadValue { column: "step", .. }),
+        "{e}"
+    );
 
     let e = read_curve_csv(Path::new("/nonexistent/curve.csv")).unwrap_err();
     assert!(e.to_string().contains("/nonexistent/curve.csv"), "{e}");
@@ -103,9 +144,17 @@ fn summary_of_polyline_by_hand() {
     // The whole curve: 1250 + 3750 + 7000 + 4000.
     assert!(close(energy_to_fed(&rows, 3e-3).unwrap(), 16000.0, 1e-12));
     // Window [2, 3] mm: constant 4 MPa.
-    assert!(close(residual_bond_stress(&rows, 1.0 / 3.0).unwrap(), 4e6, 1e-12));
+    assert!(close(
+        residual_bond_stress(&rows, 1.0 / 3.0).unwrap(),
+        4e6,
+        1e-12
+    ));
     // Window [1.5, 3] mm: (2.75 + 4) MPa·mm / 1.5 mm = 4.5 MPa.
-    assert!(close(residual_bond_stress(&rows, 0.5).unwrap(), 4.5e6, 1e-12));
+    assert!(close(
+        residual_bond_stress(&rows, 0.5).unwrap(),
+        4.5e6,
+        1e-12
+    ));
 
     let s = summarize(
         &rows,
@@ -211,8 +260,78 @@ fn table_entries_are_in_named_units() {
     let rows = rows_mm_mpa(&[(0.5, 5.0), (1.0, 10.0), (2.0, 4.0)]);
     let s = summarize(&rows, &SummaryOptions::default()).unwrap();
     let e = s.table_entries();
-    let get = |k: &str| e.iter().find(|(n, _)| n == k).unwrap_or_else(|| panic!("{k} in {e:?}")).1.clone();
+    let get = |k: &str| {
+        e.iter()
+            .find(|(n, _)| n == k)
+            .unwrap_or_else(|| panic!("{k} in {e:?}"))
+            .1
+            .clone()
+    };
     assert_eq!(get("peak_bond_stress_MPa"), pipeline::post::Cell::Num(10.0));
     assert_eq!(get("fed_at_peak_mm"), pipeline::post::Cell::Num(1.0));
-    assert_eq!(get("energy_to_1mm_J_per_m2"), pipeline::post::Cell::Num(5000.0));
+    assert_eq!(
+        get("energy_to_1mm_J_per_m2"),
+        pipeline::post::Cell::Num(5000.0)
+    );
+}
+
+/// Rows with the same value as abscissa for both axes: (x in m, σ in Pa).
+fn rows_xy(points: &[(f64, f64)]) -> Vec<CurveRow> {
+    points
+        .iter()
+        .enumerate()
+        .map(|(i, &(x, s))| CurveRow::new(i as u64 + 1, x, 0.0, x, s, 1))
+        .collect()
+}
+
+/// The relative L2 curve distance is exact for polylines whatever their
+/// sampling: a curve scaled by 1.1 is 0.1 away, and a ramp against a ramp
+/// that levels off at half-way is √(1/8) away (SPEC §7 "curve distance").
+#[test]
+fn curve_distance_closed_forms() {
+    let reference = rows_xy(&[(0.13, 0.13e6), (0.5, 0.5e6), (0.71, 0.71e6), (1.0, 1.0e6)]);
+    let scaled = rows_xy(&[(0.2, 0.22e6), (0.9, 0.99e6), (1.0, 1.1e6), (1.4, 1.54e6)]);
+    let d = curve_distance(&scaled, &reference, CurveAxis::Fed, None).unwrap();
+    assert!((d - 0.1).abs() < 1e-12, "{d}");
+
+    let levelled = rows_xy(&[(0.25, 0.25e6), (0.5, 0.5e6), (0.8, 0.5e6), (1.0, 0.5e6)]);
+    let d = curve_distance(&levelled, &reference, CurveAxis::ImposedDisplacement, None).unwrap();
+    assert!((d - (1.0f64 / 8.0).sqrt()).abs() < 1e-12, "{d}");
+    // Restricted to where the two agree: zero.
+    let d = curve_distance(&levelled, &reference, CurveAxis::Fed, Some(0.5)).unwrap();
+    assert!(d.abs() < 1e-12, "{d}");
+}
+
+/// Along FED the pre-slip branch (free end not yet moving) does not count;
+/// along the imposed displacement it does.
+#[test]
+fn curve_distance_axes_differ_on_pre_slip() {
+    let row = |i: u64, u: f64, fed: f64, s: f64| CurveRow::new(i, u, 0.0, fed, s, 1);
+    let a = vec![
+        row(1, 1.0, 0.0, 5e6),
+        row(2, 2.0, 0.0, 8e6),
+        row(3, 3.0, 1.0, 8e6),
+        row(4, 4.0, 2.0, 6e6),
+    ];
+    let b = vec![
+        row(1, 1.0, 0.0, 4e6),
+        row(2, 2.0, 0.0, 8e6),
+        row(3, 3.0, 1.0, 8e6),
+        row(4, 4.0, 2.0, 6e6),
+    ];
+    assert!(curve_distance(&a, &b, CurveAxis::Fed, None).unwrap() < 1e-12);
+    assert!(curve_distance(&a, &b, CurveAxis::ImposedDisplacement, None).unwrap() > 1e-3);
+}
+
+/// Curves the distance cannot be defined for are refused.
+#[test]
+fn curve_distance_refuses() {
+    let good = rows_xy(&[(0.5, 1e6), (1.0, 2e6)]);
+    let back = rows_xy(&[(0.5, 1e6), (0.3, 2e6), (1.0, 2e6)]);
+    let e = curve_distance(&back, &good, CurveAxis::Fed, None).unwrap_err();
+    assert!(e.to_string().contains("step 2"), "{e}");
+    assert!(curve_distance(&[], &good, CurveAxis::Fed, None).is_err());
+    let stuck = rows_xy(&[(0.0, 1e6)]);
+    assert!(curve_distance(&good, &stuck, CurveAxis::Fed, None).is_err());
+    assert!(curve_distance(&good, &good, CurveAxis::Fed, Some(-1.0)).is_err());
 }

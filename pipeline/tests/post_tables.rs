@@ -8,7 +8,9 @@ use pipeline::post::{
 use std::path::{Path, PathBuf};
 
 fn scratch(name: &str) -> PathBuf {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("post_tables").join(name);
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join("post_tables")
+        .join(name);
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     dir
@@ -18,7 +20,9 @@ fn curve(peak_mpa: f64) -> Vec<CurveRow> {
     [(0.2, 0.5), (0.5, 1.0), (1.0, 0.6), (2.0, 0.4)]
         .iter()
         .enumerate()
-        .map(|(i, &(fed, k))| CurveRow::new(i as u64 + 1, 0.0, 0.0, fed * 1e-3, k * peak_mpa * 1e6, 2))
+        .map(|(i, &(fed, k))| {
+            CurveRow::new(i as u64 + 1, 0.0, 0.0, fed * 1e-3, k * peak_mpa * 1e6, 2)
+        })
         .collect()
 }
 
@@ -27,7 +31,10 @@ fn cases() -> Vec<StudyCase> {
     vec![
         StudyCase {
             label: "beta=40".into(),
-            params: vec![("bar.ribs.angle".into(), Cell::Text("40 deg".into())), ("mu".into(), 0.3.into())],
+            params: vec![
+                ("bar.ribs.angle".into(), Cell::Text("40 deg".into())),
+                ("mu".into(), 0.3.into()),
+            ],
             summary: summarize(&curve(10.0), &opts).unwrap().table_entries(),
         },
         StudyCase {
@@ -35,9 +42,15 @@ fn cases() -> Vec<StudyCase> {
             params: vec![
                 ("bar.ribs.angle".into(), Cell::Text("90 deg".into())),
                 ("mu".into(), 0.001.into()),
-                ("mesh.h_interface".into(), (&serde_json::json!(0.0008)).into()),
+                (
+                    "mesh.h_interface".into(),
+                    (&serde_json::json!(0.0008)).into(),
+                ),
             ],
-            summary: vec![("peak_bond_stress_MPa".into(), 12.5.into()), ("note".into(), "stopped at step 3".into())],
+            summary: vec![
+                ("peak_bond_stress_MPa".into(), 12.5.into()),
+                ("note".into(), "stopped at step 3".into()),
+            ],
         },
     ]
 }
@@ -82,16 +95,32 @@ fn study_tables_written() {
     let lines: Vec<&str> = csv_text.lines().collect();
     assert_eq!(lines.len(), 3);
     assert!(lines[0].starts_with("case,bar.ribs.angle,mu,mesh.h_interface,peak_bond_stress_MPa,"));
-    assert!(lines[1].starts_with("beta=40,40 deg,0.3,,10,"), "{}", lines[1]);
-    assert!(lines[2].starts_with("\"beta=90, rough|x\",90 deg,0.001,0.0008,12.5,"), "{}", lines[2]);
+    assert!(
+        lines[1].starts_with("beta=40,40 deg,0.3,,10,"),
+        "{}",
+        lines[1]
+    );
+    assert!(
+        lines[2].starts_with("\"beta=90, rough|x\",90 deg,0.001,0.0008,12.5,"),
+        "{}",
+        lines[2]
+    );
     assert!(lines[2].ends_with(",stopped at step 3"), "{}", lines[2]);
 
     let md_text = std::fs::read_to_string(&md).unwrap();
     let md_lines: Vec<&str> = md_text.lines().collect();
     assert_eq!(md_lines.len(), 4);
     assert!(md_lines[0].starts_with("| case | bar.ribs.angle | mu |"));
-    assert!(md_lines[1].starts_with("| --- | --- | ---: | ---: | ---: |"), "{}", md_lines[1]);
-    assert!(md_lines[3].starts_with("| beta=90, rough\\|x | 90 deg | 0.001 | 8e-4 | 12.5 |"), "{}", md_lines[3]);
+    assert!(
+        md_lines[1].starts_with("| --- | --- | ---: | ---: | ---: |"),
+        "{}",
+        md_lines[1]
+    );
+    assert!(
+        md_lines[3].starts_with("| beta=90, rough\\|x | 90 deg | 0.001 | 8e-4 | 12.5 |"),
+        "{}",
+        md_lines[3]
+    );
     // Every Markdown row has as many cells as the header.
     let bars = |l: &str| l.replace("\\|", "").matches('|').count();
     assert!(md_lines.iter().all(|l| bars(l) == bars(md_lines[0])));
@@ -106,13 +135,21 @@ fn convergence_tables_written() {
     let grids: Vec<GridResult> = h
         .iter()
         .enumerate()
-        .map(|(i, &h)| GridResult { h, value: f(h), dofs: Some(1000 * (4 - i) as u64), wall_time: Some(10.0 / (i + 1) as f64) })
+        .map(|(i, &h)| GridResult {
+            h,
+            value: f(h),
+            dofs: Some(1000 * (4 - i) as u64),
+            wall_time: Some(10.0 / (i + 1) as f64),
+        })
         .collect();
     let studies = vec![
         convergence_study("peak_bond_stress_MPa", &grids).unwrap(),
         convergence_study(
             "fed_at_peak_mm",
-            &grids.iter().map(|g| GridResult { value: 0.3, ..*g }).collect::<Vec<_>>(),
+            &grids
+                .iter()
+                .map(|g| GridResult { value: 0.3, ..*g })
+                .collect::<Vec<_>>(),
         )
         .unwrap(),
     ];
@@ -121,7 +158,10 @@ fn convergence_tables_written() {
     write_convergence_tables(&studies, &csv, &md).unwrap();
     let text = std::fs::read_to_string(&csv).unwrap();
     let lines: Vec<&str> = text.lines().collect();
-    assert_eq!(lines[0], "quantity,h_mm,dofs,value,rel_error_vs_extrapolated,gci,wall_time_s");
+    assert_eq!(
+        lines[0],
+        "quantity,h_mm,dofs,value,rel_error_vs_extrapolated,gci,wall_time_s"
+    );
     assert_eq!(lines.len(), 1 + 8);
     let first: Vec<&str> = lines[1].split(',').collect();
     assert_eq!(first[0], "peak_bond_stress_MPa");
@@ -130,15 +170,26 @@ fn convergence_tables_written() {
     assert_eq!(first[3].parse::<f64>().unwrap(), f(0.4e-3));
     let err: f64 = first[4].parse().unwrap();
     assert!((err - (f(0.4e-3) - 9.0) / 9.0).abs() < 1e-9, "{err}");
-    assert_eq!(first[5].parse::<f64>().unwrap(), studies[0].triplets[0].gci_fine.unwrap());
+    assert_eq!(
+        first[5].parse::<f64>().unwrap(),
+        studies[0].triplets[0].gci_fine.unwrap()
+    );
     assert_eq!(first[6], "10");
     // Coarsest grid: no GCI.
     assert_eq!(lines[4].split(',').nth(5), Some(""));
 
     let md_text = std::fs::read_to_string(&md).unwrap();
-    assert!(md_text.contains("| quantity | h_mm | dofs | value | rel_error_vs_extrapolated | gci | wall_time_s |"));
-    assert!(md_text.contains("| peak_bond_stress_MPa | 0.4 / 0.8 / 1.2 | monotonic | 2 | 9 |"), "{md_text}");
-    assert!(md_text.contains("| fed_at_peak_mm | 0.4 / 0.8 / 1.2 | grid-independent |"), "{md_text}");
+    assert!(md_text.contains(
+        "| quantity | h_mm | dofs | value | rel_error_vs_extrapolated | gci | wall_time_s |"
+    ));
+    assert!(
+        md_text.contains("| peak_bond_stress_MPa | 0.4 / 0.8 / 1.2 | monotonic | 2 | 9 |"),
+        "{md_text}"
+    );
+    assert!(
+        md_text.contains("| fed_at_peak_mm | 0.4 / 0.8 / 1.2 | grid-independent |"),
+        "{md_text}"
+    );
 
     let order = convergence_order_table(&studies);
     assert_eq!(order.rows.len(), 4);

@@ -177,17 +177,17 @@ pub fn convergence_study(
         problem,
     };
     if grids.len() < 3 {
-        return Err(err(format!(
-            "needs at least 3 grids, got {}",
-            grids.len()
-        )));
+        return Err(err(format!("needs at least 3 grids, got {}", grids.len())));
     }
     for (i, g) in grids.iter().enumerate() {
         if !(g.h.is_finite() && g.h > 0.0) {
             return Err(err(format!("grid {i}: size h = {} m is not > 0", g.h)));
         }
         if !g.value.is_finite() {
-            return Err(err(format!("grid {i} (h = {} m): value is not finite", g.h)));
+            return Err(err(format!(
+                "grid {i} (h = {} m): value is not finite",
+                g.h
+            )));
         }
         if let Some(t) = g.wall_time {
             if !(t.is_finite() && t >= 0.0) {
@@ -202,7 +202,12 @@ pub fn convergence_study(
     }
     let triplets = sorted
         .windows(3)
-        .map(|w| three_grid_estimate([w[0].h, w[1].h, w[2].h], [w[0].value, w[1].value, w[2].value]))
+        .map(|w| {
+            three_grid_estimate(
+                [w[0].h, w[1].h, w[2].h],
+                [w[0].value, w[1].value, w[2].value],
+            )
+        })
         .collect::<Result<Vec<_>, _>>()
         .map_err(|e| err(e.to_string()))?;
     Ok(ConvergenceStudy {
@@ -215,14 +220,18 @@ pub fn convergence_study(
 /// Celik's procedure on three grids; `h` must be strictly increasing
 /// (fine, medium, coarse), m; `values` are φ1, φ2, φ3.
 pub fn three_grid_estimate(h: [f64; 3], values: [f64; 3]) -> Result<TripletEstimate, PostError> {
-    if !h.iter().all(|x| x.is_finite() && *x > 0.0) || !(h[0] < h[1] && h[1] < h[2]) {
+    let positive = h.iter().all(|x| x.is_finite() && *x > 0.0);
+    if !(positive && h[0] < h[1] && h[1] < h[2]) {
         return Err(PostError::invalid(
             "grid sizes",
             format!("{h:?} m must be positive and strictly increasing (fine to coarse)"),
         ));
     }
     if !values.iter().all(|v| v.is_finite()) {
-        return Err(PostError::invalid("grid values", format!("{values:?} are not all finite")));
+        return Err(PostError::invalid(
+            "grid values",
+            format!("{values:?} are not all finite"),
+        ));
     }
     let [f1, f2, f3] = values;
     let r21 = h[1] / h[0];

@@ -81,14 +81,15 @@ pub fn parse_curve_csv(text: &str, path: &Path) -> Result<Vec<CurveRow>, PostErr
     let names: Vec<&str> = header.split(',').map(str::trim).collect();
     let mut index = [0usize; 6];
     for (slot, column) in index.iter_mut().zip(CURVE_COLUMNS) {
-        *slot = names
-            .iter()
-            .position(|n| *n == column)
-            .ok_or_else(|| PostError::MissingColumn {
-                path: path.to_path_buf(),
-                column,
-                expected: CURVE_COLUMNS.join(","),
-            })?;
+        *slot =
+            names
+                .iter()
+                .position(|n| *n == column)
+                .ok_or_else(|| PostError::MissingColumn {
+                    path: path.to_path_buf(),
+                    column,
+                    expected: CURVE_COLUMNS.join(","),
+                })?;
     }
 
     let mut rows = Vec::new();

@@ -27,6 +27,7 @@
 
 mod convergence;
 mod curve;
+mod distance;
 mod error;
 mod fsutil;
 mod plot;
@@ -38,6 +39,7 @@ pub use convergence::{
     GridResult, TripletEstimate, GCI_SAFETY_FACTOR,
 };
 pub use curve::{parse_curve_csv, read_curve_csv, CurveRow, CURVE_COLUMNS};
+pub use distance::{curve_distance, CurveAxis};
 pub use error::PostError;
 pub use plot::{
     bond_slip_plot, bond_slip_png, bond_slip_svg, ensure_font, error_vs_time_plot,
@@ -45,8 +47,7 @@ pub use plot::{
     interface_line_svg, ErrorTimeSeries, InterfaceProfile, InterfaceSample, FONT_FAMILY,
 };
 pub use summary::{
-    energy_to_fed, peak_bond_stress, residual_bond_stress, summarize, CurveSummary,
-    SummaryOptions,
+    energy_to_fed, peak_bond_stress, residual_bond_stress, summarize, CurveSummary, SummaryOptions,
 };
 pub use table::{
     convergence_order_table, convergence_table, study_table, write_convergence_tables,

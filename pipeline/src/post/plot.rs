@@ -98,7 +98,11 @@ impl ErrorTimeSeries {
 static FONT: OnceLock<Result<PathBuf, String>> = OnceLock::new();
 
 /// Directories searched for a `.ttf`, after the preferred files.
-const FONT_DIRS: [&str; 3] = ["/usr/share/fonts", "/usr/local/share/fonts", "/usr/share/fonts/truetype"];
+const FONT_DIRS: [&str; 3] = [
+    "/usr/share/fonts",
+    "/usr/local/share/fonts",
+    "/usr/share/fonts/truetype",
+];
 /// Preferred fonts, best first.
 const PREFERRED_FONTS: [&str; 4] = [
     "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf",
@@ -116,10 +120,7 @@ fn collect_ttf(dir: &Path, depth: usize, out: &mut Vec<PathBuf>) {
     for p in entries {
         if p.is_dir() && depth > 0 {
             collect_ttf(&p, depth - 1, out);
-        } else if p
-            .extension()
-            .is_some_and(|e| e.eq_ignore_ascii_case("ttf"))
-        {
+        } else if p.extension().is_some_and(|e| e.eq_ignore_ascii_case("ttf")) {
             out.push(p);
         }
     }
@@ -133,7 +134,11 @@ fn load_font() -> Result<PathBuf, String> {
     }
     // Upright regular faces read best; prefer them over bold/italic/mono.
     let plain = |p: &PathBuf| {
-        let n = p.file_name().unwrap_or_default().to_string_lossy().to_lowercase();
+        let n = p
+            .file_name()
+            .unwrap_or_default()
+            .to_string_lossy()
+            .to_lowercase();
         ["bold", "italic", "oblique", "mono", "light", "math"]
             .iter()
             .all(|w| !n.contains(w))
@@ -221,7 +226,11 @@ where
 /// curves sharing a start (the origin) do not pile up.
 fn marker_indices(n: usize, series: usize) -> impl Iterator<Item = usize> {
     let stride = n.div_ceil(MARKERS_PER_SERIES).max(1);
-    let start = if stride > 1 { (1 + series * stride / 3) % stride } else { 0 };
+    let start = if stride > 1 {
+        (1 + series * stride / 3) % stride
+    } else {
+        0
+    };
     (start..n).step_by(stride)
 }
 
@@ -240,7 +249,10 @@ where
     Y: Ranged<ValueType = f64>,
 {
     let color = PALETTE[index % PALETTE.len()];
-    chart.draw_series(LineSeries::new(points.iter().copied(), color.stroke_width(2)))?;
+    chart.draw_series(LineSeries::new(
+        points.iter().copied(),
+        color.stroke_width(2),
+    ))?;
     let r = 5;
     // One arm per shape: each shape is its own element type.
     macro_rules! with_shape {
@@ -291,7 +303,8 @@ where
     for<'b> &'b M: PointCollection<'b, (f64, f64)>,
     L: IntoDynElement<'a, DB, BackendCoord>,
 {
-    let markers = chart.draw_series(marker_indices(points.len(), series).map(|i| marker(points[i])))?;
+    let markers =
+        chart.draw_series(marker_indices(points.len(), series).map(|i| marker(points[i])))?;
     if let Some(label) = label {
         markers.label(label).legend(legend);
     }
@@ -335,7 +348,10 @@ fn tick(v: &f64) -> String {
 fn check_finite(what: &str, values: impl Iterator<Item = f64>) -> Result<(), PostError> {
     for v in values {
         if !v.is_finite() {
-            return Err(PostError::invalid(what, "contains a value that is not finite"));
+            return Err(PostError::invalid(
+                what,
+                "contains a value that is not finite",
+            ));
         }
     }
     Ok(())
@@ -345,7 +361,10 @@ fn check_finite(what: &str, values: impl Iterator<Item = f64>) -> Result<(), Pos
 
 fn check_curves(curves: &[(&str, &[CurveRow])]) -> Result<(), PostError> {
     if curves.is_empty() || curves.iter().all(|(_, rows)| rows.is_empty()) {
-        return Err(PostError::invalid("bond–slip plot", "no curve has any point"));
+        return Err(PostError::invalid(
+            "bond–slip plot",
+            "no curve has any point",
+        ));
     }
     for (label, rows) in curves {
         check_finite(
@@ -487,7 +506,10 @@ pub fn bond_slip_plot(
 
 fn check_profiles(profiles: &[InterfaceProfile]) -> Result<(), PostError> {
     if profiles.is_empty() || profiles.iter().all(|p| p.samples.is_empty()) {
-        return Err(PostError::invalid("interface line plot", "no profile has any sample"));
+        return Err(PostError::invalid(
+            "interface line plot",
+            "no profile has any sample",
+        ));
     }
     for p in profiles {
         check_finite(
@@ -514,7 +536,8 @@ where
         .collect();
     let (x0, x1) = padded_range(sorted.iter().flatten().map(|s| s.z * 1e3), false);
     let (left, right) = root.split_horizontally(root.dim_in_pixel().0 / 2);
-    let panels: [(&DrawingArea<DB, Shift>, &str, fn(&InterfaceSample) -> f64); 2] = [
+    type Pick = fn(&InterfaceSample) -> f64;
+    let panels: [(&DrawingArea<DB, Shift>, &str, Pick); 2] = [
         (&left, "Normal traction t_n (MPa)", |s| s.normal),
         (&right, "Shear traction t_t (MPa)", |s| s.shear),
     ];
@@ -631,7 +654,11 @@ fn log_tick(v: &f64) -> String {
     }
 }
 
-fn draw_error_time<DB>(root: &DrawingArea<DB, Shift>, series: &[ErrorTimeSeries], pts: &[Vec<(f64, f64)>]) -> DrawResult
+fn draw_error_time<DB>(
+    root: &DrawingArea<DB, Shift>,
+    series: &[ErrorTimeSeries],
+    pts: &[Vec<(f64, f64)>],
+) -> DrawResult
 where
     DB: DrawingBackend,
     DB::ErrorType: 'static,
@@ -680,7 +707,11 @@ pub fn error_vs_time_svg(series: &[ErrorTimeSeries], svg: &Path) -> Result<(), P
 
 /// Relative error against wall time on log–log axes, one series per
 /// quantity, as PNG and SVG.
-pub fn error_vs_time_plot(series: &[ErrorTimeSeries], png: &Path, svg: &Path) -> Result<(), PostError> {
+pub fn error_vs_time_plot(
+    series: &[ErrorTimeSeries],
+    png: &Path,
+    svg: &Path,
+) -> Result<(), PostError> {
     error_vs_time_png(series, png)?;
     error_vs_time_svg(series, svg)
 }

@@ -64,7 +64,10 @@ impl CurveSummary {
     pub fn table_entries(&self) -> Vec<(String, Cell)> {
         let num = |x: f64| Cell::Num(x);
         vec![
-            ("peak_bond_stress_MPa".into(), num(self.peak_bond_stress * 1e-6)),
+            (
+                "peak_bond_stress_MPa".into(),
+                num(self.peak_bond_stress * 1e-6),
+            ),
             ("fed_at_peak_mm".into(), num(self.fed_at_peak * 1e3)),
             (
                 format!("energy_to_{}mm_J_per_m2", fmt_mm(self.energy_fed_limit)),

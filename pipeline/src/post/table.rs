@@ -128,7 +128,11 @@ fn significant(x: f64, digits: usize) -> String {
     } else {
         let s = format!("{x:.prec$e}", prec = digits - 1);
         let (mantissa, exp) = s.split_once('e').unwrap_or((&s, "0"));
-        let mantissa = if mantissa.contains('.') { trim(mantissa) } else { mantissa.to_string() };
+        let mantissa = if mantissa.contains('.') {
+            trim(mantissa)
+        } else {
+            mantissa.to_string()
+        };
         format!("{mantissa}e{exp}")
     }
 }
@@ -171,7 +175,11 @@ impl Table {
         out.push_str(&format!("| {} |\n", header.join(" | ")));
         let align: Vec<&str> = (0..self.columns.len())
             .map(|j| {
-                let mut cells = self.rows.iter().map(|r| &r[j]).filter(|c| **c != Cell::Empty);
+                let mut cells = self
+                    .rows
+                    .iter()
+                    .map(|r| &r[j])
+                    .filter(|c| **c != Cell::Empty);
                 let numeric = cells.clone().next().is_some() && cells.all(Cell::is_numeric);
                 if numeric {
                     "---:"
