@@ -26,7 +26,7 @@ pub const GCI_SAFETY_FACTOR: f64 = 1.25;
 const MAX_ORDER: f64 = 64.0;
 
 /// One grid of a mesh series.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct GridResult {
     /// Representative cell size h, m (e.g. the interface element size, or
     /// (V/N)^(1/3)); only ratios of h matter.
@@ -107,14 +107,13 @@ pub struct ConvergenceStudy {
     /// Name of the quantity of interest (with its unit).
     pub quantity: String,
     /// Grids sorted from finest to coarsest.
-    #[serde(skip)]
     pub grids: Vec<GridResult>,
     /// `triplets[i]` uses grids i, i+1, i+2; `triplets[0]` is the finest.
     pub triplets: Vec<TripletEstimate>,
 }
 
 /// One line of a convergence table.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct ConvergenceRow {
     /// m
     pub h: f64,
