@@ -130,7 +130,7 @@ impl Layout {
                 clearance_ends: f64::INFINITY,
             };
             rl.phi_a = rl.angle_where_long_rib_drops_to(r, r + rl.a);
-            rl.place(r, z_lo, z_hi, l, l_adh, t.phase);
+            rl.place(z_lo, z_hi, l, l_adh, t.phase);
             rl
         });
         Layout {
@@ -216,8 +216,7 @@ impl RibLayout {
         out
     }
 
-    fn place(&mut self, r: f64, z_lo: f64, z_hi: f64, l: f64, l_adh: f64, phase: f64) {
-        let _ = r;
+    fn place(&mut self, z_lo: f64, z_hi: f64, l: f64, l_adh: f64, phase: f64) {
         let c = self.c;
         let base = self.critical_offsets();
         let mut offsets = base.clone();
@@ -274,8 +273,8 @@ impl RibLayout {
         let rel = z - shift - zs[0];
         let idx = (rel / c).round().clamp(0.0, (zs.len() - 1) as f64) as usize;
         let mut h: f64 = 0.0;
-        for i in idx.saturating_sub(1)..(idx + 2).min(zs.len()) {
-            h = h.max(self.profile((z - shift - zs[i]).abs()));
+        for zk in &zs[idx.saturating_sub(1)..(idx + 2).min(zs.len())] {
+            h = h.max(self.profile((z - shift - zk).abs()));
         }
         h
     }

@@ -237,6 +237,8 @@ struct Lateral {
 }
 
 const COLUMNS: usize = 720;
+/// Extra rows per flank in the longitudinal-rib band.
+const BAND_SUBDIVISIONS: usize = 16;
 
 fn lateral_surface(layout: &Layout) -> Lateral {
     let r = layout.r;
@@ -250,12 +252,17 @@ fn lateral_surface(layout: &Layout) -> Lateral {
         layout.ribs.as_ref().map_or(0.0, |rl| rl.k.abs() + rl.c) + (z_hi - z_lo) * 0.01 + 1e-3;
     for side in 0..2 {
         let mut rows = vec![z_lo - margin, z_hi + margin];
+        // Rows inside the flanks, used only in the longitudinal-rib band where
+        // the flank meets the rib floor at a level between foot and crest.
+        let mut fine = vec![];
         let mut sign = 0.0;
+        let mut band = 0.0;
         if let Some(rl) = &layout.ribs {
             for phi in [rl.phi_top, rl.phi_base, rl.phi_a, rl.t_s] {
                 cols.push(phi);
                 cols.push(PI - phi);
             }
+            band = rl.phi_base;
             sign = rl.sides[side].sign * rl.k;
             for &zeta in &rl.sides[side].zeta {
                 // Foot rows sit a hair outside the base so a vertical flank
@@ -264,11 +271,22 @@ fn lateral_surface(layout: &Layout) -> Lateral {
                 for e in [-foot, -rl.wt / 2.0, rl.wt / 2.0, foot] {
                     rows.push(zeta + e);
                 }
+                if rl.wb > rl.wt {
+                    for i in 1..BAND_SUBDIVISIONS {
+                        let e = rl.wt / 2.0
+                            + (rl.wb - rl.wt) / 2.0 * i as f64 / BAND_SUBDIVISIONS as f64;
+                        fine.push(zeta - e);
+                        fine.push(zeta + e);
+                    }
+                }
             }
         }
         cols.sort_by(f64::total_cmp);
         cols.dedup_by(|a, b| (*a - *b).abs() < 1e-13);
         rows.sort_by(f64::total_cmp);
+        let mut rows_band = rows.clone();
+        rows_band.extend(fine);
+        rows_band.sort_by(f64::total_cmp);
         let point = |t: f64, zeta: f64| -> Point<f64> {
             let z = zeta + sign * t.cos();
             let rho = match &layout.ribs {
@@ -281,20 +299,28 @@ fn lateral_surface(layout: &Layout) -> Lateral {
             let th = t + side as f64 * PI;
             Point::new(rho * th.cos(), rho * th.sin(), z)
         };
-        let grid: Vec<Vec<Point<f64>>> = cols
+        let in_band = |t: f64| t <= band * (1.0 + 1e-9) || t >= PI - band * (1.0 + 1e-9);
+        let grid: Vec<(Vec<f64>, Vec<Point<f64>>)> = cols
             .iter()
-            .map(|&t| rows.iter().map(|&zeta| point(t, zeta)).collect())
+            .map(|&t| {
+                let rs = if in_band(t) { &rows_band } else { &rows };
+                (rs.clone(), rs.iter().map(|&zeta| point(t, zeta)).collect())
+            })
             .collect();
-        for i in 0..cols.len() - 1 {
-            for j in 0..rows.len() - 1 {
-                let (p00, p10, p11, p01) = (
-                    grid[i][j],
-                    grid[i + 1][j],
-                    grid[i + 1][j + 1],
-                    grid[i][j + 1],
-                );
-                tris.push([p00, p10, p11]);
-                tris.push([p00, p11, p01]);
+        // Zipper between neighbouring columns: both share the coarse rows, so
+        // the strips are watertight even where one column has extra rows.
+        for w in grid.windows(2) {
+            let ((za, pa), (zb, pb)) = (&w[0], &w[1]);
+            let (mut i, mut j) = (0, 0);
+            while i + 1 < za.len() || j + 1 < zb.len() {
+                let advance_a = j + 1 == zb.len() || (i + 1 < za.len() && za[i + 1] <= zb[j + 1]);
+                if advance_a {
+                    tris.push([pa[i], pb[j], pa[i + 1]]);
+                    i += 1;
+                } else {
+                    tris.push([pa[i], pb[j], pb[j + 1]]);
+                    j += 1;
+                }
             }
         }
     }

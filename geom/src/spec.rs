@@ -497,3 +497,156 @@ fn resolve_ribs(raw: RawRibs, raw_l: RawLongitudinalRibs, d: f64) -> Result<Ribs
         },
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn try_resolve(bar: &str, specimen: &str) -> Result<(Bar, Specimen), SpecError> {
+        let bar: RawBar = serde_yaml::from_str(bar).unwrap();
+        let sp: RawSpecimen = serde_yaml::from_str(specimen).unwrap();
+        resolve(&bar, &sp)
+    }
+
+    fn err(bar: &str, specimen: &str) -> String {
+        try_resolve(bar, specimen).unwrap_err().to_string()
+    }
+
+    /// Defaults follow SPEC §2 (L = 10 d, l_adh = L/2) and SPEC §3 (a = 0.065 d, β = 55°).
+    #[test]
+    fn defaults_follow_the_spec() {
+        let (bar, sp) = try_resolve("{kind: ribbed, diameter: 16 mm}", "{}").unwrap();
+        assert!((sp.cube_side - 0.16).abs() < 1e-15 && (sp.adhesive_length - 0.08).abs() < 1e-15);
+        assert_eq!(sp.non_adhesive, NonAdhesive::Free);
+        let t = bar.ribs.unwrap().transverse;
+        assert!((t.height - 1.04e-3).abs() < 1e-15 && (t.angle - 55f64.to_radians()).abs() < 1e-15);
+        assert_eq!(t.side_b, SideB::Rotated);
+    }
+
+    /// Every out-of-range parameter names its dotted key, its value and the bound (SPEC §3, §8).
+    #[test]
+    fn violations_name_the_key_value_and_bound() {
+        let ribbed = |ribs: &str| format!("{{kind: ribbed, diameter: 8 mm, ribs: {ribs}}}");
+        let cases = [
+            (ribbed("{height: 5 mm}"), "{}", "bar.ribs.height", "< d/2"),
+            (ribbed("{height: -1 mm}"), "{}", "bar.ribs.height", "> 0"),
+            (ribbed("{spacing: 0}"), "{}", "bar.ribs.spacing", "> 0"),
+            (
+                ribbed("{spacing: 2 mm}"),
+                "{}",
+                "bar.ribs.base_width",
+                "overlap",
+            ),
+            (ribbed("{angle: 0 deg}"), "{}", "bar.ribs.angle", "(0, 90]"),
+            (ribbed("{angle: 95 deg}"), "{}", "bar.ribs.angle", "(0, 90]"),
+            (
+                ribbed("{top_width: 2 mm, base_width: 1 mm}"),
+                "{}",
+                "bar.ribs.base_width",
+                ">= bar.ribs.top_width",
+            ),
+            (
+                ribbed("{phase: 9 mm}"),
+                "{}",
+                "bar.ribs.phase",
+                "[0, bar.ribs.spacing",
+            ),
+            (
+                "{kind: ribbed, diameter: 8 mm, longitudinal_ribs: {height: 0.3 mm}}".into(),
+                "{}",
+                "bar.longitudinal_ribs.height",
+                ">= bar.ribs.height",
+            ),
+            (
+                "{kind: ribbed, diameter: 8 mm, longitudinal_ribs: {base_width: 5 mm}}".into(),
+                "{}",
+                "bar.longitudinal_ribs.base_width",
+                "<= d/2",
+            ),
+            (
+                "{kind: smooth, diameter: -8 mm}".into(),
+                "{}",
+                "bar.diameter",
+                "> 0",
+            ),
+            (
+                "{kind: smooth, diameter: 8 mm}".into(),
+                "{adhesive_length: 90 mm}",
+                "specimen.adhesive_length",
+                "<= specimen.cube_side",
+            ),
+            (
+                "{kind: smooth, diameter: 8 mm}".into(),
+                "{free_overhang: -1 mm}",
+                "specimen.free_overhang",
+                ">= 0",
+            ),
+            (
+                "{kind: smooth, diameter: 8 mm}".into(),
+                "{loaded_overhang: -1 mm}",
+                "specimen.loaded_overhang",
+                ">= 0",
+            ),
+            (
+                "{kind: ribbed, diameter: 8 mm}".into(),
+                "{cube_side: 9 mm}",
+                "specimen.cube_side",
+                "wider than the bar",
+            ),
+            (
+                "{kind: smooth, diameter: 8 mm, ribs: {}}".into(),
+                "{}",
+                "bar.ribs",
+                "smooth bar",
+            ),
+            (
+                "{kind: smooth, diameter: 8 MPa}".into(),
+                "{}",
+                "bar.diameter",
+                "MPa",
+            ),
+        ];
+        for (bar, sp, key, bound) in cases {
+            let msg = err(&bar, sp);
+            assert!(
+                msg.contains(key) && msg.contains(bound),
+                "{bar} {sp}: {msg}"
+            );
+        }
+        // The value is shown with its unit.
+        let msg = err(&ribbed("{height: 5 mm}"), "{}");
+        assert!(msg.contains("5 mm"), "{msg}");
+    }
+
+    /// A plain number above π/2 for an angle is taken for degrees given without unit: the error suggests "deg" (SPEC §2 units).
+    #[test]
+    fn plain_angle_above_right_angle_suggests_degrees() {
+        let msg = err("{kind: ribbed, diameter: 8 mm, ribs: {angle: 55}}", "{}");
+        assert!(
+            msg.contains("bar.ribs.angle") && msg.contains("\"55 deg\""),
+            "{msg}"
+        );
+        assert!(try_resolve("{kind: ribbed, diameter: 8 mm, ribs: {angle: 1.0}}", "{}").is_ok());
+    }
+
+    /// Unknown keys are rejected at parse time (SPEC §8).
+    #[test]
+    fn unknown_keys_are_rejected() {
+        assert!(
+            serde_yaml::from_str::<RawBar>("{kind: smooth, diameter: 8 mm, colour: red}").is_err()
+        );
+        assert!(serde_yaml::from_str::<RawRibs>("{hieght: 1 mm}").is_err());
+        assert!(serde_yaml::from_str::<RawSpecimen>("{cube: 1}").is_err());
+    }
+
+    /// l_adh = L is allowed (SPEC §2: l_adh ≤ L).
+    #[test]
+    fn adhesive_length_may_equal_the_cube_side() {
+        let (_, sp) = try_resolve(
+            "{kind: smooth, diameter: 10 mm}",
+            "{cube_side: 125 mm, adhesive_length: 125 mm}",
+        )
+        .unwrap();
+        assert_eq!(sp.adhesive_length, sp.cube_side);
+    }
+}
