@@ -31,11 +31,24 @@ fn fczm() -> Fczm {
 
 /// Table 3 R1-like parameters with δ_s ≠ 1 and ζ = 8, to exercise the ratios.
 fn fczm_calibrated() -> Fczm {
-    Fczm { tensile_strength: 2.16e6, fracture_energy: 97.0, lambda0: 5e-5, delta_s: 0.16, friction: 0.3, zeta: 8.0, ..fczm() }
+    Fczm {
+        tensile_strength: 2.16e6,
+        fracture_energy: 97.0,
+        lambda0: 5e-5,
+        delta_s: 0.16,
+        friction: 0.3,
+        zeta: 8.0,
+        ..fczm()
+    }
 }
 
 fn tvergaard() -> Tvergaard {
-    Tvergaard { tensile_strength: 3e6, fracture_energy: 200.0, lambda0: 1e-5, delta_s: 0.5 }
+    Tvergaard {
+        tensile_strength: 3e6,
+        fracture_energy: 200.0,
+        lambda0: 1e-5,
+        delta_s: 0.5,
+    }
 }
 
 /// Appendix B parameters.
@@ -56,7 +69,9 @@ fn mazars() -> Mazars {
         poisson_ratio: 0.2,
         eps_d0: 1e-4,
         shear_exponent: 1.06,
-        tension: TensionSoftening::Regularised { fracture_energy: 80.0 },
+        tension: TensionSoftening::Regularised {
+            fracture_energy: 80.0,
+        },
         compression: CompressionSoftening::SizeFit,
     }
     .at_size(1e-3)
@@ -70,18 +85,27 @@ fn j2() -> J2 {
 /// Commits the law along `history` from the virgin state.
 fn interface_history(law: &dyn InterfaceLaw, history: &[[f64; 3]]) -> InterfaceState {
     history.iter().fold(InterfaceState::default(), |s, u| {
-        law.step(&s, &Vector3::from(*u), TangentKind::Consistent).unwrap().state
+        law.step(&s, &Vector3::from(*u), TangentKind::Consistent)
+            .unwrap()
+            .state
     })
 }
 
 fn bulk_history(law: &dyn BulkLaw, history: &[[f64; 6]]) -> BulkState {
     history.iter().fold(BulkState::default(), |s, e| {
-        law.step(&s, &Vector6::from(*e), TangentKind::Consistent).unwrap().state
+        law.step(&s, &Vector6::from(*e), TangentKind::Consistent)
+            .unwrap()
+            .state
     })
 }
 
 /// Central differences of the traction at fixed committed state.
-fn fd_interface(law: &dyn InterfaceLaw, st: &InterfaceState, u: &Vector3<f64>, h: f64) -> Matrix3<f64> {
+fn fd_interface(
+    law: &dyn InterfaceLaw,
+    st: &InterfaceState,
+    u: &Vector3<f64>,
+    h: f64,
+) -> Matrix3<f64> {
     let mut k = Matrix3::zeros();
     for j in 0..3 {
         let (mut p, mut m) = (*u, *u);
@@ -119,13 +143,27 @@ macro_rules! interface_tangent {
             let u = Vector3::from($u);
             let r = law.step(&st, &u, TangentKind::Consistent).unwrap();
             let regime: fn(&InterfaceState, &InterfaceState) -> bool = $regime;
-            assert!(regime(&st, &r.state), "not in the intended regime: {st:?} -> {:?}", r.state);
+            assert!(
+                regime(&st, &r.state),
+                "not in the intended regime: {st:?} -> {:?}",
+                r.state
+            );
             let h = 1e-6 * u.amax();
             let fd = fd_interface(&law, &st, &u, h);
             let err = (fd - r.tangent).amax();
-            assert!(err <= 1e-5 * r.tangent.amax(), "tangent\n{}vs finite differences\n{}", r.tangent, fd);
+            assert!(
+                err <= 1e-5 * r.tangent.amax(),
+                "tangent\n{}vs finite differences\n{}",
+                r.tangent,
+                fd
+            );
             // The secant reproduces the traction when it is a true secant (no slip history).
-            assert!(law.step(&st, &u, TangentKind::Secant).unwrap().tangent.iter().all(|v| v.is_finite()));
+            assert!(law
+                .step(&st, &u, TangentKind::Secant)
+                .unwrap()
+                .tangent
+                .iter()
+                .all(|v| v.is_finite()));
         }
     };
 }
@@ -140,11 +178,20 @@ macro_rules! bulk_tangent {
             let e = Vector6::from($e);
             let r = law.step(&st, &e, TangentKind::Consistent).unwrap();
             let regime: fn(&BulkState, &BulkState) -> bool = $regime;
-            assert!(regime(&st, &r.state), "not in the intended regime: {st:?} -> {:?}", r.state);
+            assert!(
+                regime(&st, &r.state),
+                "not in the intended regime: {st:?} -> {:?}",
+                r.state
+            );
             let h = 1e-6 * e.amax();
             let fd = fd_bulk(&law, &st, &e, h);
             let err = (fd - r.tangent).amax();
-            assert!(err <= 1e-5 * r.tangent.amax(), "tangent\n{}vs finite differences\n{}", r.tangent, fd);
+            assert!(
+                err <= 1e-5 * r.tangent.amax(),
+                "tangent\n{}vs finite differences\n{}",
+                r.tangent,
+                fd
+            );
         }
     };
 }
@@ -258,7 +305,10 @@ bulk_tangent!(j2_tangent_unloading, "J2 consistent tangent is C in elastic unloa
 struct Lcg(u64);
 impl Lcg {
     fn next(&mut self) -> f64 {
-        self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
         ((self.0 >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
     }
 }
@@ -279,7 +329,10 @@ fn interface_damage_never_decreases() {
         for _ in 0..400 {
             u += Vector3::new(rng.next(), rng.next(), rng.next()) * 1e-5;
             let r = law.step(&st, &u, TangentKind::Consistent).unwrap();
-            assert!(r.state.damage >= st.damage && r.state.lambda_max >= st.lambda_max, "{law:?}");
+            assert!(
+                r.state.damage >= st.damage && r.state.lambda_max >= st.lambda_max,
+                "{law:?}"
+            );
             assert!((0.0..=1.0).contains(&r.state.damage));
             st = r.state;
         }
@@ -300,7 +353,11 @@ fn mazars_damage_never_decreases() {
         assert!((0.0..=1.0).contains(&r.state.damage));
         st = r.state;
     }
-    assert!(st.damage > 0.5, "the path should have damaged the point, D = {}", st.damage);
+    assert!(
+        st.damage > 0.5,
+        "the path should have damaged the point, D = {}",
+        st.damage
+    );
 }
 
 /// J2 radial return lands on the yield surface whenever it flows, and stays inside otherwise (SPEC §5).
@@ -342,15 +399,27 @@ fn laws_return_errors_not_nan() {
     for law in interfaces {
         for &a in &extremes {
             for &b in &extremes {
-                for kind in [TangentKind::Elastic, TangentKind::Secant, TangentKind::Consistent] {
+                for kind in [
+                    TangentKind::Elastic,
+                    TangentKind::Secant,
+                    TangentKind::Consistent,
+                ] {
                     match law.step(&InterfaceState::default(), &Vector3::new(a, b, -b), kind) {
-                        Ok(r) => assert!(r.traction.iter().chain(r.tangent.iter()).all(|v| v.is_finite())),
+                        Ok(r) => assert!(r
+                            .traction
+                            .iter()
+                            .chain(r.tangent.iter())
+                            .all(|v| v.is_finite())),
                         Err(e) => assert!(matches!(e, LawError::NonFiniteResult { .. })),
                     }
                 }
             }
         }
-        let err = law.step(&InterfaceState::default(), &Vector3::new(f64::NAN, 0.0, 0.0), TangentKind::Consistent);
+        let err = law.step(
+            &InterfaceState::default(),
+            &Vector3::new(f64::NAN, 0.0, 0.0),
+            TangentKind::Consistent,
+        );
         assert!(matches!(err, Err(LawError::NonFiniteInput { .. })));
     }
     let bulks: [&dyn BulkLaw; 2] = [&mazars(), &j2()];
@@ -359,13 +428,20 @@ fn laws_return_errors_not_nan() {
             for &b in &extremes {
                 let e = Vector6::new(a, b, -a, b, 0.0, a);
                 match law.step(&BulkState::default(), &e, TangentKind::Consistent) {
-                    Ok(r) => assert!(r.stress.iter().chain(r.tangent.iter()).all(|v| v.is_finite())),
+                    Ok(r) => assert!(r
+                        .stress
+                        .iter()
+                        .chain(r.tangent.iter())
+                        .all(|v| v.is_finite())),
                     Err(e) => assert!(matches!(e, LawError::NonFiniteResult { .. })),
                 }
             }
         }
         let e = Vector6::new(f64::INFINITY, 0.0, 0.0, 0.0, 0.0, 0.0);
-        assert!(matches!(law.step(&BulkState::default(), &e, TangentKind::Consistent), Err(LawError::NonFiniteInput { .. })));
+        assert!(matches!(
+            law.step(&BulkState::default(), &e, TangentKind::Consistent),
+            Err(LawError::NonFiniteInput { .. })
+        ));
     }
 }
 
@@ -374,9 +450,21 @@ fn laws_return_errors_not_nan() {
 fn contact_is_no_tension_frictionless() {
     let law = AnyInterfaceLaw::contact(4e10);
     let st = InterfaceState::default();
-    let open = law.step(&st, &Vector3::new(1e-4, 2e-4, -1e-4), TangentKind::Consistent).unwrap();
+    let open = law
+        .step(
+            &st,
+            &Vector3::new(1e-4, 2e-4, -1e-4),
+            TangentKind::Consistent,
+        )
+        .unwrap();
     assert_eq!(open.traction, Vector3::zeros());
-    let closed = law.step(&st, &Vector3::new(-1e-5, 2e-4, 3e-4), TangentKind::Consistent).unwrap();
+    let closed = law
+        .step(
+            &st,
+            &Vector3::new(-1e-5, 2e-4, 3e-4),
+            TangentKind::Consistent,
+        )
+        .unwrap();
     assert!((closed.traction[0] + 4e10 * 1e-5).abs() < 1e-6);
     assert_eq!(closed.traction[1], 0.0);
     assert_eq!(closed.traction[2], 0.0);
@@ -391,21 +479,34 @@ fn mazars_size_regularisation() {
         poisson_ratio: 0.2,
         eps_d0: 1e-4,
         shear_exponent: 1.06,
-        tension: TensionSoftening::Regularised { fracture_energy: 80.0 },
+        tension: TensionSoftening::Regularised {
+            fracture_energy: 80.0,
+        },
         compression: CompressionSoftening::SizeFit,
     };
     for l in [0.2e-3, 1e-3, 5e-3] {
         let law = m.at_size(l).unwrap();
-        let solve::laws::mazars::TensionBranch::Exponential { b_t } = law.tension else { panic!() };
+        let solve::laws::mazars::TensionBranch::Exponential { b_t } = law.tension else {
+            panic!()
+        };
         let gf = l * (30e9 * 1e-8 / 2.0 + 30e9 * 1e-4 / b_t);
         assert!((gf - 80.0).abs() < 1e-9 * 80.0);
     }
     // l_max = 2 G_f / (E ε_D0²) = 0.5333 m.
     let err = m.at_size(0.6).unwrap_err();
     assert!(matches!(err, MazarsSizeError::TooLarge { .. }));
-    assert!(err.to_string().contains("too large") && err.to_string().contains("0.5333"), "{err}");
-    assert!(matches!(m.at_size(1e-6), Err(MazarsSizeError::OutsideFit { .. })));
-    assert!(matches!(m.at_size(-1.0), Err(MazarsSizeError::BadSize { .. })));
+    assert!(
+        err.to_string().contains("too large") && err.to_string().contains("0.5333"),
+        "{err}"
+    );
+    assert!(matches!(
+        m.at_size(1e-6),
+        Err(MazarsSizeError::OutsideFit { .. })
+    ));
+    assert!(matches!(
+        m.at_size(-1.0),
+        Err(MazarsSizeError::BadSize { .. })
+    ));
 }
 
 /// Secant tangents are what the docs say: (1 − D)C for Mazars, σ = K_sec u for Tvergaard (docs/laws.md).
@@ -413,11 +514,15 @@ fn mazars_size_regularisation() {
 fn secant_tangents() {
     let law = mazars();
     let e = Vector6::new(5e-4, -1e-4, -1e-4, 0.0, 0.0, 0.0);
-    let r = law.step(&BulkState::default(), &e, TangentKind::Secant).unwrap();
+    let r = law
+        .step(&BulkState::default(), &e, TangentKind::Secant)
+        .unwrap();
     assert!((r.tangent - law.stiffness() * (1.0 - r.state.damage)).amax() < 1e-6);
     assert!((r.tangent * e - r.stress).amax() < 1e-6);
     let t = tvergaard();
     let u = Vector3::new(3e-5, -2e-5, 1e-5);
-    let r = t.step(&InterfaceState::default(), &u, TangentKind::Secant).unwrap();
+    let r = t
+        .step(&InterfaceState::default(), &u, TangentKind::Secant)
+        .unwrap();
     assert!((r.tangent * u - r.traction).amax() < 1e-6);
 }

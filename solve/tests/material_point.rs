@@ -6,7 +6,9 @@ use solve::material_point::{run, run_file, MaterialPointError, MaterialTest, Poi
 use std::path::PathBuf;
 
 fn case_path(name: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../specs/material").join(name)
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../specs/material")
+        .join(name)
 }
 
 fn case(name: &str) -> PointTable {
@@ -23,7 +25,10 @@ fn col(t: &PointTable, name: &str) -> Vec<f64> {
 
 /// Trapezoidal ∫ y dx.
 fn area(x: &[f64], y: &[f64]) -> f64 {
-    x.windows(2).zip(y.windows(2)).map(|(x, y)| 0.5 * (y[0] + y[1]) * (x[1] - x[0])).sum()
+    x.windows(2)
+        .zip(y.windows(2))
+        .map(|(x, y)| 0.5 * (y[0] + y[1]) * (x[1] - x[0]))
+        .sum()
 }
 
 fn max(v: &[f64]) -> f64 {
@@ -45,8 +50,15 @@ fn assert_same(a: &PointTable, b: &PointTable, cols: &[&str], rel: f64) {
         let (x, y) = (col(a, c), col(b, c));
         assert_eq!(x.len(), y.len());
         let scale = x.iter().fold(1e-30f64, |m, v| m.max(v.abs()));
-        let worst = x.iter().zip(&y).map(|(p, q)| (p - q).abs()).fold(0.0, f64::max);
-        assert!(worst <= rel * scale, "column {c}: max difference {worst:e} vs scale {scale:e}");
+        let worst = x
+            .iter()
+            .zip(&y)
+            .map(|(p, q)| (p - q).abs())
+            .fold(0.0, f64::max);
+        assert!(
+            worst <= rel * scale,
+            "column {c}: max difference {worst:e} vs scale {scale:e}"
+        );
     }
 }
 
@@ -99,7 +111,10 @@ fn fczm_compression_raises_the_shear_peak() {
     let mut last = ft;
     for (sn, file) in COMPRESSIONS {
         let peak = max(&col(&case(file), "tt"));
-        assert!(peak > last, "sigma_N = -{sn} Pa: peak {peak} Pa not above {last} Pa");
+        assert!(
+            peak > last,
+            "sigma_N = -{sn} Pa: peak {peak} Pa not above {last} Pa"
+        );
         last = peak;
     }
 }
@@ -123,7 +138,10 @@ fn fczm_residual_shear_is_friction() {
 fn fczm_high_compression_peak_is_residual() {
     let tt = col(&case("fczm-shear-compression-20MPa.yaml"), "tt");
     let (peak, expected) = (max(&tt), 0.4 * 20e6);
-    assert!((peak - expected).abs() <= 0.005 * expected, "peak {peak} vs {expected}");
+    assert!(
+        (peak - expected).abs() <= 0.005 * expected,
+        "peak {peak} vs {expected}"
+    );
 }
 
 /// In pure tension the area under σ_n(u_n) is f_t λ_0/2 + ζ G_f within 0.5 % (eqs. 22–25, A.6–A.10; SPEC §5).
@@ -132,7 +150,10 @@ fn fczm_tension_energy() {
     let t = case("fczm-tension.yaml");
     let a = area(&col(&t, "un"), &col(&t, "tn"));
     let expected = 3e6 * 2e-5 / 2.0 + 1.0 * 300.0;
-    assert!((a - expected).abs() <= 0.005 * expected, "area {a} N/m vs {expected} N/m");
+    assert!(
+        (a - expected).abs() <= 0.005 * expected,
+        "area {a} N/m vs {expected} N/m"
+    );
 }
 
 /// With ζ = 8 the tension area grows to f_t λ_0/2 + ζ G_f (eq. 22; SPEC §5).
@@ -145,7 +166,10 @@ fn fczm_tension_energy_scales_with_zeta() {
     let t = run(&test).unwrap();
     let a = area(&col(&t, "un"), &col(&t, "tn"));
     let expected = 3e6 * 2e-5 / 2.0 + 8.0 * 300.0;
-    assert!((a - expected).abs() <= 0.005 * expected, "area {a} N/m vs {expected} N/m");
+    assert!(
+        (a - expected).abs() <= 0.005 * expected,
+        "area {a} N/m vs {expected} N/m"
+    );
 }
 
 /// Tvergaard's normal response (App. A, Fig. A.1a) is linear K_n in compression, peaks at f_t and dissipates f_t λ_0/2 + G_f (A.5–A.10).
@@ -160,18 +184,29 @@ fn tvergaard_appendix_a_normal() {
         }
     }
     assert!((max(&tn) - 3e6).abs() < 1e-6 * 3e6);
-    let start = un.iter().position(|&u| u == 0.0 && tn.iter().any(|_| true)).unwrap();
+    let start = un
+        .iter()
+        .position(|&u| u == 0.0 && tn.iter().any(|_| true))
+        .unwrap();
     let a = area(&un[start..], &tn[start..]);
     let expected = 3e6 * 1e-5 / 2.0 + 200.0;
-    assert!((a - expected).abs() <= 0.005 * expected, "area {a} vs {expected}");
+    assert!(
+        (a - expected).abs() <= 0.005 * expected,
+        "area {a} vs {expected}"
+    );
 }
 
 /// Tvergaard's shear peak drops as the imposed initial opening grows (App. A, Fig. A.1b).
 #[test]
 fn tvergaard_appendix_a_shear_peak_drops_with_opening() {
-    let peaks: Vec<f64> =
-        (0..5).map(|i| max(&col(&case(&format!("tvergaard-appA-shear-{i}.yaml")), "tt"))).collect();
-    assert!((peaks[0] - 3e6).abs() < 1e-6 * 3e6, "pure shear peak {}", peaks[0]);
+    let peaks: Vec<f64> = (0..5)
+        .map(|i| max(&col(&case(&format!("tvergaard-appA-shear-{i}.yaml")), "tt")))
+        .collect();
+    assert!(
+        (peaks[0] - 3e6).abs() < 1e-6 * 3e6,
+        "pure shear peak {}",
+        peaks[0]
+    );
     assert!(peaks.windows(2).all(|w| w[1] < w[0]), "{peaks:?}");
 }
 
@@ -206,7 +241,10 @@ fn coulomb_appendix_b_shear() {
 /// Regularised Mazars dissipates G_f per unit area, l ∫σ dε = G_f within 1 %, for l = 1 and 5 mm (eqs. 9–10, Fig. 4b; SPEC §5).
 #[test]
 fn mazars_tension_energy_is_gf_for_any_size() {
-    for (l, file) in [(1e-3, "mazars-tension-l1mm.yaml"), (5e-3, "mazars-tension-l5mm.yaml")] {
+    for (l, file) in [
+        (1e-3, "mazars-tension-l1mm.yaml"),
+        (5e-3, "mazars-tension-l5mm.yaml"),
+    ] {
         let t = case(file);
         let w = l * area(&col(&t, "exx"), &col(&t, "sxx"));
         assert!((w - 80.0).abs() <= 0.01 * 80.0, "l = {l}: {w} N/m");
@@ -240,14 +278,22 @@ fn mazars_compression_curves_coincide_in_displacement() {
             let yi = s[k - 1] + (s[k] - s[k - 1]) * (x - d[k - 1]) / (d[k] - d[k - 1]);
             worst = worst.max((yi - y).abs());
         }
-        assert!(worst <= 0.05 * peak, "l = {l} mm: max deviation {worst} Pa vs peak {peak} Pa");
+        assert!(
+            worst <= 0.05 * peak,
+            "l = {l} mm: max deviation {worst} Pa vs peak {peak} Pa"
+        );
     }
 }
 
 /// Mazars with eqs. (12)–(13) from l (SPEC §5 sign reading) stays within 5 % of Table 1's curves too.
 #[test]
 fn mazars_compression_fit_matches_table_1() {
-    for (l, ac, bc) in [(1e-3, 0.0169, 29.6), (2e-3, 0.0343, 60.3), (3e-3, 0.0517, 90.0), (5e-3, 0.09, 152.0)] {
+    for (l, ac, bc) in [
+        (1e-3, 0.0169, 29.6),
+        (2e-3, 0.0343, 60.3),
+        (3e-3, 0.0517, 90.0),
+        (5e-3, 0.09, 152.0),
+    ] {
         let (a, b) = solve::laws::mazars::compression_fit(l);
         assert!((a - ac).abs() <= 0.03 * ac, "A_c({l}) = {a} vs {ac}");
         assert!((b - bc).abs() <= 0.03 * bc, "B_c({l}) = {b} vs {bc}");
@@ -261,14 +307,23 @@ fn j2_uniaxial_cycle() {
     let sy = 365e6;
     let n = t.rows.len();
     let stress: Vec<nalgebra::Vector6<f64>> = (0..n)
-        .map(|i| nalgebra::Vector6::from_iterator(["sxx", "syy", "szz", "sxy", "syz", "sxz"].iter().map(|c| col(&t, c)[i])))
+        .map(|i| {
+            nalgebra::Vector6::from_iterator(
+                ["sxx", "syy", "szz", "sxy", "syz", "sxz"]
+                    .iter()
+                    .map(|c| col(&t, c)[i]),
+            )
+        })
         .collect();
     let ep = col(&t, "epxx");
     for i in 1..n {
         let vm = von_mises(&stress[i]);
         assert!(vm <= sy * (1.0 + 1e-9), "row {i}: von Mises {vm}");
         if ep[i] != ep[i - 1] {
-            assert!((vm - sy).abs() <= 1e-9 * sy, "row {i}: yielding off the surface, {vm}");
+            assert!(
+                (vm - sy).abs() <= 1e-9 * sy,
+                "row {i}: yielding off the surface, {vm}"
+            );
         }
     }
     let sxx = col(&t, "sxx");
@@ -295,7 +350,11 @@ fn damage_never_decreases_in_shipped_cases() {
             let t = run_file(&path).unwrap_or_else(|e| panic!("{e}"));
             let d = col(&t, "D");
             assert!(d.windows(2).all(|w| w[1] >= w[0]), "{}", path.display());
-            assert!(t.rows.iter().flatten().all(|v| v.is_finite()), "{}", path.display());
+            assert!(
+                t.rows.iter().flatten().all(|v| v.is_finite()),
+                "{}",
+                path.display()
+            );
             n += 1;
         }
     }
@@ -312,13 +371,21 @@ fn fczm_unload_reload_is_secant() {
     for i in 0..tm.len() {
         let reloading_below = tm[i] > 3.0 && un[i] > 0.0 && un[i] <= un[i_max];
         if (tm[i] > 1.0 && tm[i] <= 2.0) || reloading_below {
-            assert!((tn[i] - secant * un[i]).abs() <= 1e-9 * tn[i_max], "t = {}", tm[i]);
+            assert!(
+                (tn[i] - secant * un[i]).abs() <= 1e-9 * tn[i_max],
+                "t = {}",
+                tm[i]
+            );
         }
         if tm[i] > 2.0 && tm[i] <= 3.0 {
             // Closed in compression: (1 − D)σ_un = K_n u_n (eq. 25) plus the damaged part D K_n u_n (eqs. 15–17).
             let d = col(&t, "D")[i];
             let expected = (1.0 + d) * 1.5e11 * un[i];
-            assert!((tn[i] - expected).abs() <= 1e-9 * expected.abs(), "compression t = {}", tm[i]);
+            assert!(
+                (tn[i] - expected).abs() <= 1e-9 * expected.abs(),
+                "compression t = {}",
+                tm[i]
+            );
         }
     }
     // Past the previous maximum the response is the monotonic one.
@@ -341,7 +408,11 @@ fn mazars_unload_reload() {
         let unloading = tm[i] > 1.0 && tm[i] <= 3.0;
         let reloading_below = tm[i] > 3.0 && e[i] <= e[i_max];
         if unloading || reloading_below {
-            assert!((s[i] - secant * e[i]).abs() <= 1e-6 * s[i_max], "t = {}", tm[i]);
+            assert!(
+                (s[i] - secant * e[i]).abs() <= 1e-6 * s[i_max],
+                "t = {}",
+                tm[i]
+            );
             assert_eq!(d[i], d[i_max]);
         }
     }
@@ -371,7 +442,10 @@ fn bad_test_files_name_file_and_key() {
         std::fs::write(&p, text).unwrap();
         let err: MaterialPointError = run_file(&p).unwrap_err();
         let msg = err.to_string();
-        assert!(msg.contains(&format!("case{i}.yaml")) && msg.contains(needle), "{msg}");
+        assert!(
+            msg.contains(&format!("case{i}.yaml")) && msg.contains(needle),
+            "{msg}"
+        );
     }
     std::fs::remove_dir_all(&dir).ok();
 }
@@ -388,4 +462,22 @@ fn csv_columns() {
     let text = String::from_utf8(out).unwrap();
     assert!(text.starts_with("t,exx,eyy,ezz,exy,eyz,exz,sxx,syy,szz,sxy,syz,sxz,D"));
     assert_eq!(text.lines().count(), 1 + 101);
+}
+
+/// Held tractions are met at every point (mixed control, issue 4); with the
+/// total σ_n held the FCZM's closed normal stiffness (1 + D) K_n shows as a
+/// shrinking u_n (docs/laws.md).
+#[test]
+fn held_normal_traction_under_shear() {
+    let mut test = read_case("fczm-shear-compression-5MPa.yaml");
+    for row in &mut test.path {
+        row.un = None;
+    }
+    test.stress
+        .insert("tn".into(), geom::units::RawQuantity::Text("-5 MPa".into()));
+    let t = run(&test).unwrap();
+    assert!(col(&t, "tn").iter().all(|s| (s + 5e6).abs() <= 1e-6 * 5e6));
+    let (un, d) = (col(&t, "un"), col(&t, "D"));
+    let last = un.len() - 1;
+    assert!((un[last] * 1.5e11 * (1.0 + d[last]) + 5e6).abs() <= 1e-6 * 5e6);
 }

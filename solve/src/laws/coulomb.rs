@@ -136,6 +136,10 @@ impl InterfaceLaw for Coulomb {
     }
 
     fn elastic_stiffness(&self) -> Matrix3<f64> {
-        Matrix3::from_diagonal(&Vector3::new(self.normal_stiffness, self.shear_stiffness, self.shear_stiffness))
+        Matrix3::from_diagonal(&Vector3::new(
+            self.normal_stiffness,
+            self.shear_stiffness,
+            self.shear_stiffness,
+        ))
     }
 }

@@ -114,7 +114,11 @@ impl InterfaceLaw for Fczm {
         // Damage indicator and damage (A.2–A.4, 22).
         let (lam, dlam) = opening(jump, self.delta_s);
         let loading = lam - self.lambda0 > committed.lambda_max;
-        let lt = if loading { lam - self.lambda0 } else { committed.lambda_max.max(0.0) };
+        let lt = if loading {
+            lam - self.lambda0
+        } else {
+            committed.lambda_max.max(0.0)
+        };
         let big = lt + self.lambda0;
         let dbig = if loading { dlam } else { Vector3::zeros() };
         let q_nat = (-c * lt).exp();
@@ -122,7 +126,11 @@ impl InterfaceLaw for Fczm {
         let floored = floor_q <= q_nat;
         let q = if floored { floor_q } else { q_nat };
         let d = 1.0 - q;
-        let dq = if floored { Vector3::zeros() } else { dbig * (-c * q) };
+        let dq = if floored {
+            Vector3::zeros()
+        } else {
+            dbig * (-c * q)
+        };
         let dd = -dq;
         let r = self.lambda0 / big;
         let dr = dbig * (-self.lambda0 / (big * big));
@@ -212,6 +220,10 @@ impl InterfaceLaw for Fczm {
     }
 
     fn elastic_stiffness(&self) -> Matrix3<f64> {
-        Matrix3::from_diagonal(&Vector3::new(self.normal_stiffness(), self.shear_stiffness(), self.shear_stiffness()))
+        Matrix3::from_diagonal(&Vector3::new(
+            self.normal_stiffness(),
+            self.shear_stiffness(),
+            self.shear_stiffness(),
+        ))
     }
 }

@@ -34,7 +34,11 @@ pub struct J2 {
 impl Default for J2 {
     /// The paper's steel: 200 GPa, 0.3, 365 MPa.
     fn default() -> Self {
-        J2 { young_modulus: 200e9, poisson_ratio: 0.3, yield_stress: 365e6 }
+        J2 {
+            young_modulus: 200e9,
+            poisson_ratio: 0.3,
+            yield_stress: 365e6,
+        }
     }
 }
 
@@ -42,7 +46,8 @@ impl Default for J2 {
 pub fn von_mises(s: &Vector6<f64>) -> f64 {
     let p = (s[0] + s[1] + s[2]) / 3.0;
     let d = [s[0] - p, s[1] - p, s[2] - p];
-    let n2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2] + 2.0 * (s[3] * s[3] + s[4] * s[4] + s[5] * s[5]);
+    let n2 =
+        d[0] * d[0] + d[1] * d[1] + d[2] * d[2] + 2.0 * (s[3] * s[3] + s[4] * s[4] + s[5] * s[5]);
     (1.5 * n2).sqrt()
 }
 
@@ -112,7 +117,10 @@ impl BulkLaw for J2 {
         Ok(BulkResponse {
             stress,
             tangent,
-            state: BulkState { plastic_strain: plastic, ..*committed },
+            state: BulkState {
+                plastic_strain: plastic,
+                ..*committed
+            },
         })
     }
 }

@@ -89,7 +89,12 @@ pub enum MazarsSizeError {
          G_f = {fracture_energy} N/m must exceed l E ε_D0²/2 = {elastic_energy} N/m \
          (snap-back), so l must be below {l_max} m; refine the mesh"
     )]
-    TooLarge { l: f64, fracture_energy: f64, elastic_energy: f64, l_max: f64 },
+    TooLarge {
+        l: f64,
+        fracture_energy: f64,
+        elastic_energy: f64,
+        l_max: f64,
+    },
     #[error(
         "Mazars: element size l = {l} m gives A_c = {a_c}, B_c = {b_c} by eqs. (12)-(13), \
          outside their range (A_c >= 0, B_c > 0 needed); give A_c and B_c explicitly"
@@ -128,7 +133,9 @@ impl MazarsMaterial {
                         l_max: 2.0 * fracture_energy / (e * e0 * e0),
                     });
                 }
-                TensionBranch::Exponential { b_t: l * e * e0 / denom }
+                TensionBranch::Exponential {
+                    b_t: l * e * e0 / denom,
+                }
             }
             TensionSoftening::Classic { a_t, b_t } => TensionBranch::Classic { a_t, b_t },
         };
@@ -185,7 +192,10 @@ pub struct Mazars {
 /// Eq. (5): damage and its derivative in κ.
 fn classic(e0: f64, a: f64, b: f64, kappa: f64) -> (f64, f64) {
     let ex = (-b * (kappa - e0)).exp();
-    (1.0 - e0 * (1.0 - a) / kappa - a * ex, e0 * (1.0 - a) / (kappa * kappa) + a * b * ex)
+    (
+        1.0 - e0 * (1.0 - a) / kappa - a * ex,
+        e0 * (1.0 - a) / (kappa * kappa) + a * b * ex,
+    )
 }
 
 fn voigt_to_tensor(e: &Vector6<f64>) -> Matrix3<f64> {
@@ -257,7 +267,11 @@ impl Mazars {
         let wt = alpha_t.powf(b);
         let wc = ac.powf(b);
         let d = wt * dt + wc * dc;
-        let dwt = if alpha_t > 0.0 { b * alpha_t.powf(b - 1.0) } else { 0.0 };
+        let dwt = if alpha_t > 0.0 {
+            b * alpha_t.powf(b - 1.0)
+        } else {
+            0.0
+        };
         let dwc = if ac > 0.0 { b * ac.powf(b - 1.0) } else { 0.0 };
         (d, wt * ddt + wc * ddc, dwt * dt - dwc * dc)
     }
@@ -275,7 +289,11 @@ impl BulkLaw for Mazars {
         let c = self.stiffness();
         let eig = SymmetricEigen::new(voigt_to_tensor(strain));
         let principal = eig.eigenvalues;
-        let eps_eq = principal.iter().map(|v| v.max(0.0).powi(2)).sum::<f64>().sqrt();
+        let eps_eq = principal
+            .iter()
+            .map(|v| v.max(0.0).powi(2))
+            .sum::<f64>()
+            .sqrt();
         let kappa_c = committed.kappa.max(self.eps_d0);
         let loading = eps_eq > kappa_c;
         let kappa = kappa_c.max(eps_eq);
@@ -333,7 +351,11 @@ impl BulkLaw for Mazars {
         Ok(BulkResponse {
             stress,
             tangent,
-            state: BulkState { kappa, damage: d, ..*committed },
+            state: BulkState {
+                kappa,
+                damage: d,
+                ..*committed
+            },
         })
     }
 }

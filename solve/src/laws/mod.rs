@@ -36,11 +36,17 @@ pub enum TangentKind {
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum LawError {
     #[error("{law}: non-finite input {what}")]
-    NonFiniteInput { law: &'static str, what: &'static str },
+    NonFiniteInput {
+        law: &'static str,
+        what: &'static str,
+    },
     #[error("{law}: return mapping did not converge ({detail})")]
     ReturnMapping { law: &'static str, detail: String },
     #[error("{law}: non-finite result ({what})")]
-    NonFiniteResult { law: &'static str, what: &'static str },
+    NonFiniteResult {
+        law: &'static str,
+        what: &'static str,
+    },
 }
 
 /// Committed history of one bulk integration point. Each law uses its part.
@@ -104,7 +110,11 @@ pub trait InterfaceLaw: Sync {
 }
 
 /// `Err(NonFiniteInput)` unless every component is finite.
-pub(crate) fn check_finite(law: &'static str, what: &'static str, v: &[f64]) -> Result<(), LawError> {
+pub(crate) fn check_finite(
+    law: &'static str,
+    what: &'static str,
+    v: &[f64],
+) -> Result<(), LawError> {
     if v.iter().all(|x| x.is_finite()) {
         Ok(())
     } else {
@@ -113,7 +123,11 @@ pub(crate) fn check_finite(law: &'static str, what: &'static str, v: &[f64]) -> 
 }
 
 /// `Err(NonFiniteResult)` unless every component is finite.
-pub(crate) fn check_result(law: &'static str, what: &'static str, v: &[f64]) -> Result<(), LawError> {
+pub(crate) fn check_result(
+    law: &'static str,
+    what: &'static str,
+    v: &[f64],
+) -> Result<(), LawError> {
     if v.iter().all(|x| x.is_finite()) {
         Ok(())
     } else {

@@ -44,7 +44,10 @@ pub(crate) fn opening(jump: &Vector3<f64>, delta_s: f64) -> (f64, Vector3<f64>) 
     let un = jump[0].max(0.0);
     let lam = (un * un + (jump[1] * jump[1] + jump[2] * jump[2]) / delta_s).sqrt();
     if lam > 0.0 {
-        (lam, Vector3::new(un, jump[1] / delta_s, jump[2] / delta_s) / lam)
+        (
+            lam,
+            Vector3::new(un, jump[1] / delta_s, jump[2] / delta_s) / lam,
+        )
     } else {
         (0.0, Vector3::zeros())
     }
@@ -74,7 +77,11 @@ impl InterfaceLaw for Tvergaard {
         let c = self.tensile_strength / self.fracture_energy;
         let (lam, dlam) = opening(jump, self.delta_s);
         let loading = lam - self.lambda0 > committed.lambda_max;
-        let lt = if loading { lam - self.lambda0 } else { committed.lambda_max.max(0.0) };
+        let lt = if loading {
+            lam - self.lambda0
+        } else {
+            committed.lambda_max.max(0.0)
+        };
         let big = lt + self.lambda0;
         let s = self.lambda0 / big * (-c * lt).exp();
         let open = jump[0] >= 0.0;
@@ -87,7 +94,11 @@ impl InterfaceLaw for Tvergaard {
                 let mut t = Matrix3::from_diagonal(&diag);
                 if loading {
                     let ds = -s * (1.0 / big + c);
-                    let v = Vector3::new(if open { kn * jump[0] } else { 0.0 }, ks * jump[1], ks * jump[2]);
+                    let v = Vector3::new(
+                        if open { kn * jump[0] } else { 0.0 },
+                        ks * jump[1],
+                        ks * jump[2],
+                    );
                     t += v * dlam.transpose() * ds;
                 }
                 t
@@ -107,6 +118,10 @@ impl InterfaceLaw for Tvergaard {
     }
 
     fn elastic_stiffness(&self) -> Matrix3<f64> {
-        Matrix3::from_diagonal(&Vector3::new(self.normal_stiffness(), self.shear_stiffness(), self.shear_stiffness()))
+        Matrix3::from_diagonal(&Vector3::new(
+            self.normal_stiffness(),
+            self.shear_stiffness(),
+            self.shear_stiffness(),
+        ))
     }
 }

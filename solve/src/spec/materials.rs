@@ -589,7 +589,9 @@ mod tests {
     use super::*;
 
     fn resolve(yaml: &str) -> Result<Materials, MaterialsSpecError> {
-        serde_yaml::from_str::<RawMaterials>(yaml).unwrap().resolve()
+        serde_yaml::from_str::<RawMaterials>(yaml)
+            .unwrap()
+            .resolve()
     }
 
     fn err(yaml: &str) -> String {
@@ -601,16 +603,23 @@ mod tests {
     #[test]
     fn defaults_follow_the_calibration_rule() {
         let m = resolve("{}").unwrap();
-        let ConcreteModel::Mazars(c) = m.concrete else { panic!() };
+        let ConcreteModel::Mazars(c) = m.concrete else {
+            panic!()
+        };
         assert_eq!(c.young_modulus, 30e9);
         assert!((c.tensile_strength() - 3e6).abs() < 1e-6);
         assert_eq!(m.steel, SteelModel::J2(J2::default()));
-        let AnyInterfaceLaw::Fczm(f) = m.interface.law else { panic!() };
+        let AnyInterfaceLaw::Fczm(f) = m.interface.law else {
+            panic!()
+        };
         assert!((f.tensile_strength - 2.16e6).abs() < 1e-6);
         assert!((f.fracture_energy - 0.72 * 130.0).abs() < 1e-9);
         // Eq. (29) at 2.16 MPa gives R1's 0.16 (Table 3).
         assert!((f.delta_s - 0.16).abs() < 1e-3);
-        assert_eq!((f.lambda0, f.friction, f.zeta, f.gamma), (5e-5, 0.3, 8.0, -1e6));
+        assert_eq!(
+            (f.lambda0, f.friction, f.zeta, f.gamma),
+            (5e-5, 0.3, 8.0, -1e6)
+        );
     }
 
     /// The suggested explicit form resolves to SI with ε_D0 = f_t/E.
@@ -624,10 +633,19 @@ interface: {law: fczm, ft: "2.16 MPa", Gf: "97 N/m", lambda0: "5e-5 m", delta_s:
 "#,
         )
         .unwrap();
-        let ConcreteModel::Mazars(c) = m.concrete else { panic!() };
+        let ConcreteModel::Mazars(c) = m.concrete else {
+            panic!()
+        };
         assert!((c.eps_d0 - 1e-4).abs() < 1e-18);
-        assert_eq!(c.tension, TensionSoftening::Regularised { fracture_energy: 130.0 });
-        let AnyInterfaceLaw::Fczm(f) = m.interface.law else { panic!() };
+        assert_eq!(
+            c.tension,
+            TensionSoftening::Regularised {
+                fracture_energy: 130.0
+            }
+        );
+        let AnyInterfaceLaw::Fczm(f) = m.interface.law else {
+            panic!()
+        };
         assert_eq!((f.fracture_energy, f.delta_s), (97.0, 0.16));
         assert!((f.normal_stiffness() - 2.16e6 / 5e-5).abs() < 1.0);
     }
@@ -646,13 +664,24 @@ interface: {law: coulomb, Kn: "1e11 N/m^3", Ks: 1e11, ft: "3 MPa", C: "3 MPa", p
         assert!(matches!(m.concrete, ConcreteModel::Elastic(_)));
         assert!(matches!(m.interface.law, AnyInterfaceLaw::Coulomb(_)));
         let m = resolve("interface: {law: tvergaard, lambda0: \"0.01 mm\"}").unwrap();
-        let AnyInterfaceLaw::Tvergaard(t) = m.interface.law else { panic!() };
+        let AnyInterfaceLaw::Tvergaard(t) = m.interface.law else {
+            panic!()
+        };
         assert!((t.lambda0 - 1e-5).abs() < 1e-18);
         let m = resolve("interface: {law: elastic, Kn: 1e12, Ks: 5e11}").unwrap();
         assert!(matches!(m.interface.law, AnyInterfaceLaw::Elastic(_)));
-        let m = resolve("concrete: {At: 0.8, Bt: 17000, Ac: 1.4, Bc: 1900}\ninterface: {Gf: 97}").unwrap();
-        let ConcreteModel::Mazars(c) = m.concrete else { panic!() };
-        assert_eq!(c.compression, CompressionSoftening::Classic { a_c: 1.4, b_c: 1900.0 });
+        let m = resolve("concrete: {At: 0.8, Bt: 17000, Ac: 1.4, Bc: 1900}\ninterface: {Gf: 97}")
+            .unwrap();
+        let ConcreteModel::Mazars(c) = m.concrete else {
+            panic!()
+        };
+        assert_eq!(
+            c.compression,
+            CompressionSoftening::Classic {
+                a_c: 1.4,
+                b_c: 1900.0
+            }
+        );
     }
 
     /// Bad values name the dotted key and the bound (SPEC §8).
@@ -660,20 +689,64 @@ interface: {law: coulomb, Kn: "1e11 N/m^3", Ks: 1e11, ft: "3 MPa", C: "3 MPa", p
     fn errors_name_the_key_and_the_bound() {
         let cases = [
             ("interface: {mu: -0.1}", "materials.interface.mu", ">= 0"),
-            ("interface: {law: fczm, gamma: \"1 MPa\"}", "materials.interface.gamma", "< 0"),
+            (
+                "interface: {law: fczm, gamma: \"1 MPa\"}",
+                "materials.interface.gamma",
+                "< 0",
+            ),
             ("concrete: {nu: 0.5}", "materials.concrete.nu", "(-1, 0.5)"),
-            ("steel: {sigma_y: \"-1 MPa\"}", "materials.steel.sigma_y", "> 0"),
+            (
+                "steel: {sigma_y: \"-1 MPa\"}",
+                "materials.steel.sigma_y",
+                "> 0",
+            ),
             ("concrete: {E: \"30 mm\"}", "materials.concrete.E", "stress"),
-            ("concrete: {law: concrete}", "materials.concrete.law", "mazars"),
-            ("concrete: {ft: 3e6, eps_d0: 1e-4}", "materials.concrete.eps_d0", "not both"),
-            ("concrete: {Gf: 80, At: 0.8, Bt: 1e4}", "materials.concrete.Gf", "not both"),
+            (
+                "concrete: {law: concrete}",
+                "materials.concrete.law",
+                "mazars",
+            ),
+            (
+                "concrete: {ft: 3e6, eps_d0: 1e-4}",
+                "materials.concrete.eps_d0",
+                "not both",
+            ),
+            (
+                "concrete: {Gf: 80, At: 0.8, Bt: 1e4}",
+                "materials.concrete.Gf",
+                "not both",
+            ),
             ("concrete: {At: 0.8}", "materials.concrete.Bt", "missing"),
-            ("steel: {law: elastic, sigma_y: 1e8}", "materials.steel.sigma_y", "not a parameter"),
-            ("interface: {law: coulomb, Kn: 1e11, Ks: 1e11, ft: 4e6, C: 3e6, phi: \"45 deg\"}", "materials.interface.ft", "C/tan(phi)"),
-            ("interface: {law: coulomb, Kn: 1e11, Ks: 1e11, C: 3e6, phi: 0.5}", "materials.interface.ft", "missing"),
-            ("interface: {law: tvergaard, mu: 0.3}", "materials.interface.mu", "not a parameter"),
-            ("concrete: {law: elastic}", "materials.interface.ft", "calibrate"),
-            ("interface: {ft: \"3 MPa\"}", "materials.interface.delta_s", "eq. (29)"),
+            (
+                "steel: {law: elastic, sigma_y: 1e8}",
+                "materials.steel.sigma_y",
+                "not a parameter",
+            ),
+            (
+                "interface: {law: coulomb, Kn: 1e11, Ks: 1e11, ft: 4e6, C: 3e6, phi: \"45 deg\"}",
+                "materials.interface.ft",
+                "C/tan(phi)",
+            ),
+            (
+                "interface: {law: coulomb, Kn: 1e11, Ks: 1e11, C: 3e6, phi: 0.5}",
+                "materials.interface.ft",
+                "missing",
+            ),
+            (
+                "interface: {law: tvergaard, mu: 0.3}",
+                "materials.interface.mu",
+                "not a parameter",
+            ),
+            (
+                "concrete: {law: elastic}",
+                "materials.interface.ft",
+                "calibrate",
+            ),
+            (
+                "interface: {ft: \"3 MPa\"}",
+                "materials.interface.delta_s",
+                "eq. (29)",
+            ),
         ];
         for (yaml, key, bound) in cases {
             let msg = err(yaml);
@@ -688,6 +761,9 @@ interface: {law: coulomb, Kn: "1e11 N/m^3", Ks: 1e11, ft: "3 MPa", C: "3 MPa", p
     fn concrete_law_at_size() {
         let m = resolve("{}").unwrap();
         assert!(m.concrete.at_size(0.4e-3).is_ok());
-        assert!(matches!(m.concrete.at_size(2.0), Err(MazarsSizeError::TooLarge { .. })));
+        assert!(matches!(
+            m.concrete.at_size(2.0),
+            Err(MazarsSizeError::TooLarge { .. })
+        ));
     }
 }
