@@ -167,7 +167,7 @@ fn summary_of_polyline_by_hand() {
     assert_eq!(s.peak_bond_stress, 10e6);
     assert_eq!(s.fed_at_peak, 1e-3);
     assert!(close(s.energy.unwrap(), 9250.0, 1e-12));
-    assert!(close(s.residual_bond_stress, 4.5e6, 1e-12));
+    assert!(close(s.residual_bond_stress.unwrap(), 4.5e6, 1e-12));
     assert_eq!(s.final_fed, 3e-3);
     assert_eq!(s.steps, 4);
     assert_eq!(s.total_iterations, 12);
@@ -252,6 +252,30 @@ fn summary_limits_and_bad_options() {
     assert!(summarize(&[], &SummaryOptions::default()).is_err());
     let stuck = rows_mm_mpa(&[(0.0, 1.0)]);
     assert!(residual_bond_stress(&stuck, 0.2).is_err());
+    // A run cut short before slip still has a summary, without the
+    // quantities it cannot define.
+    let s = summarize(
+        &stuck,
+        &SummaryOptions {
+            energy_fed_limit: None,
+            residual_fraction: 0.2,
+        },
+    )
+    .unwrap();
+    assert_eq!(
+        (s.peak_bond_stress, s.energy, s.residual_bond_stress),
+        (1e6, None, None)
+    );
+    let bad = SummaryOptions {
+        energy_fed_limit: Some(0.0),
+        residual_fraction: 0.2,
+    };
+    assert!(summarize(&rows, &bad).is_err());
+    let bad = SummaryOptions {
+        energy_fed_limit: None,
+        residual_fraction: 0.0,
+    };
+    assert!(summarize(&rows, &bad).is_err());
 }
 
 /// Table entries carry their unit in the name and are converted to it.

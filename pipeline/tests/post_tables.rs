@@ -194,3 +194,46 @@ fn convergence_tables_written() {
     let order = convergence_order_table(&studies);
     assert_eq!(order.rows.len(), 4);
 }
+
+/// A study case built from its study-file parameters and its summary.json
+/// gets the curve summary's columns (in named units) and the solver's DOFs
+/// and wall time.
+#[test]
+fn study_case_from_summary_json() {
+    let curve = summarize(&curve(10.0), &SummaryOptions::default()).unwrap();
+    let summary = serde_json::json!({
+        "scene": "r1",
+        "curve": curve,
+        "solver": {"summary": {"dofs": 12345, "wall_time_s": {"total": 61.5}}},
+    });
+    let params: Vec<(String, serde_yaml::Value)> = vec![
+        (
+            "bar.ribs.angle".into(),
+            serde_yaml::from_str("60 deg").unwrap(),
+        ),
+        (
+            "materials.interface.mu".into(),
+            serde_yaml::from_str("0.3").unwrap(),
+        ),
+        ("mesh.refine".into(), serde_yaml::from_str("2").unwrap()),
+    ];
+    let case = StudyCase::from_summary("case-3", &params, &summary);
+    assert_eq!(case.label, "case-3");
+    assert_eq!(
+        case.params,
+        vec![
+            ("bar.ribs.angle".to_string(), Cell::Text("60 deg".into())),
+            ("materials.interface.mu".to_string(), Cell::Num(0.3)),
+            ("mesh.refine".to_string(), Cell::Int(2)),
+        ]
+    );
+    let names: Vec<&str> = case.summary.iter().map(|(n, _)| n.as_str()).collect();
+    assert_eq!(&names[..2], ["peak_bond_stress_MPa", "fed_at_peak_mm"]);
+    assert_eq!(&names[names.len() - 2..], ["dofs", "solve_wall_time_s"]);
+    assert_eq!(case.summary[0].1, Cell::Num(10.0));
+    assert_eq!(case.summary[names.len() - 2].1, Cell::Int(12345));
+    assert_eq!(case.summary[names.len() - 1].1, Cell::Num(61.5));
+    // No curve object: only what is there.
+    let bare = StudyCase::from_summary("x", &[], &serde_json::json!({}));
+    assert!(bare.summary.is_empty());
+}

@@ -7,7 +7,7 @@
 //! the free end moves back contributes with its sign.
 
 use super::{Cell, CurveRow, PostError};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// How the curve summary is computed.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -30,7 +30,7 @@ impl Default for SummaryOptions {
 }
 
 /// Scalar summary of one curve (SI units).
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct CurveSummary {
     /// Largest σ_mb over the curve, Pa.
     pub peak_bond_stress: f64,
@@ -45,7 +45,8 @@ pub struct CurveSummary {
     /// FED up to which `energy` is integrated, m.
     pub energy_fed_limit: f64,
     /// Mean σ_mb over the last `residual_fraction` of the final FED, Pa.
-    pub residual_bond_stress: f64,
+    /// `None` when the final FED is not positive (the bar never slipped).
+    pub residual_bond_stress: Option<f64>,
     /// Fraction of the final FED used for `residual_bond_stress`.
     pub residual_fraction: f64,
     /// FED of the last converged step, m.
@@ -75,7 +76,8 @@ impl CurveSummary {
             ),
             (
                 "residual_bond_stress_MPa".into(),
-                num(self.residual_bond_stress * 1e-6),
+                self.residual_bond_stress
+                    .map_or(Cell::Empty, |r| Cell::Num(r * 1e-6)),
             ),
             ("final_fed_mm".into(), num(self.final_fed * 1e3)),
             ("steps".into(), Cell::Int(self.steps as i64)),
@@ -198,10 +200,35 @@ pub fn summarize(rows: &[CurveRow], opts: &SummaryOptions) -> Result<CurveSummar
     let (peak, fed_at_peak, step_at_peak) = peak_bond_stress(rows)?;
     let final_fed = rows[rows.len() - 1].fed;
     let energy_fed_limit = opts.energy_fed_limit.unwrap_or(final_fed);
-    let energy = match energy_to_fed(rows, energy_fed_limit) {
-        Ok(e) => Some(e),
-        Err(PostError::FedLimitBeyondCurve { .. }) => None,
-        Err(e) => return Err(e),
+    if let Some(limit) = opts.energy_fed_limit {
+        if !(limit.is_finite() && limit > 0.0) {
+            return Err(PostError::invalid(
+                "energy FED limit",
+                format!("{limit} m must be finite and > 0"),
+            ));
+        }
+    }
+    if !(opts.residual_fraction > 0.0 && opts.residual_fraction <= 1.0) {
+        return Err(PostError::invalid(
+            "residual fraction",
+            format!("{} must be in (0, 1]", opts.residual_fraction),
+        ));
+    }
+    // A curve that stops before the bar slips (a run cut short) still gets
+    // its peak and counts; the quantities it cannot define are absent.
+    let energy = if energy_fed_limit > 0.0 {
+        match energy_to_fed(rows, energy_fed_limit) {
+            Ok(e) => Some(e),
+            Err(PostError::FedLimitBeyondCurve { .. }) => None,
+            Err(e) => return Err(e),
+        }
+    } else {
+        None
+    };
+    let residual = if final_fed > 0.0 {
+        Some(residual_bond_stress(rows, opts.residual_fraction)?)
+    } else {
+        None
     };
     Ok(CurveSummary {
         peak_bond_stress: peak,
@@ -209,7 +236,7 @@ pub fn summarize(rows: &[CurveRow], opts: &SummaryOptions) -> Result<CurveSummar
         step_at_peak,
         energy,
         energy_fed_limit,
-        residual_bond_stress: residual_bond_stress(rows, opts.residual_fraction)?,
+        residual_bond_stress: residual,
         residual_fraction: opts.residual_fraction,
         final_fed,
         max_fed: rows.iter().map(|r| r.fed).fold(f64::NEG_INFINITY, f64::max),

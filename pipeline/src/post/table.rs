@@ -66,6 +66,28 @@ impl From<&serde_json::Value> for Cell {
     }
 }
 
+impl From<&serde_yaml::Value> for Cell {
+    /// A parameter value as written in a study file: numbers stay numbers,
+    /// strings (often quantities with units, "60 deg") text.
+    fn from(v: &serde_yaml::Value) -> Self {
+        match v {
+            serde_yaml::Value::Null => Cell::Empty,
+            serde_yaml::Value::Number(n) => match n.as_i64() {
+                Some(i) => Cell::Int(i),
+                None => Cell::Num(n.as_f64().unwrap_or(f64::NAN)),
+            },
+            serde_yaml::Value::String(s) => Cell::Text(s.clone()),
+            serde_yaml::Value::Bool(b) => Cell::Text(b.to_string()),
+            other => Cell::Text(
+                serde_yaml::to_string(other)
+                    .unwrap_or_default()
+                    .trim()
+                    .replace('\n', " "),
+            ),
+        }
+    }
+}
+
 impl Cell {
     fn is_numeric(&self) -> bool {
         matches!(self, Cell::Int(_) | Cell::Num(_))
@@ -217,6 +239,42 @@ pub struct StudyCase {
     /// Summary quantities, as (name with unit, value), e.g. from
     /// [`CurveSummary::table_entries`](super::CurveSummary::table_entries).
     pub summary: Vec<(String, Cell)>,
+}
+
+impl StudyCase {
+    /// A case from its swept parameters (spec key, value as written in the
+    /// study file) and its `summary.json`. Summary columns: the entries of
+    /// [`CurveSummary::table_entries`](super::CurveSummary::table_entries)
+    /// from the `curve` object, then `dofs` and `solve_wall_time_s` when the
+    /// summary has `solver.summary.dofs` and `solver.summary.wall_time_s.total`.
+    /// A summary without a readable `curve` object gives only what is found.
+    pub fn from_summary(
+        label: &str,
+        params: &[(String, serde_yaml::Value)],
+        summary: &serde_json::Value,
+    ) -> StudyCase {
+        let mut entries = summary
+            .get("curve")
+            .and_then(|c| serde_json::from_value::<super::CurveSummary>(c.clone()).ok())
+            .map(|c| c.table_entries())
+            .unwrap_or_default();
+        for (name, pointer) in [
+            ("dofs", "/solver/summary/dofs"),
+            ("solve_wall_time_s", "/solver/summary/wall_time_s/total"),
+        ] {
+            if let Some(v) = summary.pointer(pointer) {
+                entries.push((name.to_string(), Cell::from(v)));
+            }
+        }
+        StudyCase {
+            label: label.to_string(),
+            params: params
+                .iter()
+                .map(|(k, v)| (k.clone(), Cell::from(v)))
+                .collect(),
+            summary: entries,
+        }
+    }
 }
 
 /// Keys in order of first appearance over all cases.
