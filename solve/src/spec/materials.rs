@@ -179,6 +179,15 @@ pub struct InterfaceModel {
     pub law: AnyInterfaceLaw,
 }
 
+impl InterfaceModel {
+    /// The no-tension frictionless contact (SPEC §2 option for the
+    /// non-adhesive zone) with the adhesive law's normal stiffness K_n.
+    pub fn contact_law(&self) -> AnyInterfaceLaw {
+        use crate::laws::InterfaceLaw;
+        AnyInterfaceLaw::contact(self.law.elastic_stiffness()[(0, 0)])
+    }
+}
+
 /// The resolved `materials` section (SI).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Materials {
