@@ -78,3 +78,39 @@ fn smooth_scenes_build() {
         );
     }
 }
+
+/// l_adh = L (the paper's caption reading of smooth-125) builds with no free zone (SPEC §2: l_adh ≤ L).
+#[test]
+fn full_adhesive_length_builds() {
+    let (bar, mut specimen) = common::load_spec("smooth-125");
+    specimen.adhesive_length = specimen.cube_side;
+    let gmsh = Gmsh::locate().expect("gmsh (run scripts/setup.sh)");
+    let dir = common::scratch("smooth-125-full");
+    let r = geom::build_geometry(&bar, &specimen, &gmsh, &dir).unwrap();
+    assert_eq!(r.group_entities["interface_free"], 0);
+    assert!(r.interface_area_free_m2.abs() < 1e-12);
+    let expect = std::f64::consts::PI * 10e-3 * 125e-3;
+    assert!((r.checks["interface_area_adhesive_m2"].gmsh_occ - expect).abs() < 1e-6 * expect);
+}
+
+/// A rib design OCC is asked to build goes through gmsh, and a broken script fails with gmsh's message, not a panic (SPEC §8).
+#[test]
+fn gmsh_errors_surface_with_the_message() {
+    let gmsh = Gmsh::locate().expect("gmsh (run scripts/setup.sh)");
+    let dir = common::scratch("broken");
+    std::fs::write(
+        dir.join("bad.geo"),
+        "SetFactory(\"OpenCASCADE\");\nBox(1) = {0, 0, 0, 1, 1};\n",
+    )
+    .unwrap();
+    let out = gmsh.run(
+        &["bad.geo", "-0"],
+        Some(&dir),
+        std::time::Duration::from_secs(60),
+    );
+    let text = match out {
+        Ok(o) => format!("{}{}", o.stdout, o.stderr),
+        Err(e) => e.to_string(),
+    };
+    assert!(text.contains("Error"), "{text}");
+}
