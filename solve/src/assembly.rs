@@ -66,6 +66,28 @@ impl ElementLaws {
     }
 }
 
+impl ElementLaws {
+    /// Per-element laws where the concrete law depends on the element size
+    /// l (m, `Model::tet_size`, paper eq. 11), e.g. Mazars' Hillerborg
+    /// regularisation: `concrete(l)` is called once per concrete tet.
+    pub fn sized<E>(
+        model: &Model,
+        concrete: impl Fn(f64) -> Result<SharedBulkLaw, E>,
+        steel: SharedBulkLaw,
+        adhesive: SharedInterfaceLaw,
+        free: Option<SharedInterfaceLaw>,
+    ) -> Result<Self, (usize, E)> {
+        let mut laws = Self::by_region(model, steel.clone(), steel, adhesive, free);
+        for (i, r) in model.tet_region.iter().enumerate() {
+            if *r == mesh::Region::Concrete {
+                let l = model.tet_size.get(i).copied().unwrap_or(f64::NAN);
+                laws.tets[i] = concrete(l).map_err(|e| (i, e))?;
+            }
+        }
+        Ok(laws)
+    }
+}
+
 /// Committed or trial history of every integration point.
 #[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
 pub struct States {
@@ -396,6 +418,7 @@ impl System {
     /// writes the trial states, the internal force `f_int` (N, global) and,
     /// when `matrix` is given, the lower-triangle tangent values (N/m) of the
     /// tangent `kind`.
+    #[allow(clippy::too_many_arguments)]
     pub fn evaluate(
         &self,
         laws: &ElementLaws,
@@ -579,10 +602,10 @@ impl System {
                 f_int[3 * nodes[i / 3] as usize + i % 3] += fi;
             }
             if let Some(m) = matrix.as_deref_mut() {
-                for p in 0..INTERFACE_POINTS {
-                    for (c, &pos) in self.iface_map[slot][p].iter().enumerate() {
+                for (map, kp) in self.iface_map[slot].iter().zip(&klow) {
+                    for (c, &pos) in map.iter().enumerate() {
                         if pos != NONE {
-                            m[pos as usize] += klow[p][c];
+                            m[pos as usize] += kp[c];
                         }
                     }
                 }

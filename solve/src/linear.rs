@@ -299,7 +299,7 @@ pub fn pcg(
     for it in 1..=max_iterations {
         a.mul(&p, &mut ap);
         let pap = dot(&p, &ap);
-        if !(pap > 0.0) {
+        if pap.is_nan() || pap <= 0.0 {
             // Indefinite current matrix (or breakdown): CG cannot continue.
             return Err(if pap.is_finite() {
                 LinearError::NotPositiveDefinite { index: it }

@@ -237,9 +237,8 @@ fn patch_test_uniform_strain_on_perturbed_mesh() {
     let mut dir = Dirichlet::default();
     for (n, p) in m.nodes.iter().enumerate() {
         if !interior(*p) {
-            let v = ux(*p);
-            for c in 0..3 {
-                dir.push(3 * n + c, v[c], 0.0);
+            for (c, v) in ux(*p).into_iter().enumerate() {
+                dir.push(3 * n + c, v, 0.0);
             }
         }
     }
@@ -716,4 +715,43 @@ fn diverging_case_keeps_converged_steps() {
             other.map(|r| r.rows.len())
         ),
     }
+}
+
+/// Field files are written for a converged state and contain no NaN
+/// (SPEC §7 outputs; issue 5: no NaN ever reaches the output).
+#[test]
+fn vtu_fields_are_written() {
+    let m = slab_pullout(4);
+    let laws = pullout_laws(&m);
+    let loading = Loading {
+        u_final: 1e-4,
+        initial_step: 1e-5,
+        max_step: 2e-5,
+        ..Loading::default()
+    };
+    let res = solve_pullout(
+        &m,
+        &laws,
+        &loading,
+        &SolverSettings::default(),
+        None,
+        &mut Silent,
+    )
+    .unwrap();
+    let dir = std::env::temp_dir().join(format!("ribbar-vtu-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let (b, i) = (dir.join("bulk.vtu"), dir.join("interface.vtu"));
+    solve::fields::write_bulk_vtu(&b, &m, &laws, &res.last.u, &res.last.states).unwrap();
+    solve::fields::write_interface_vtu(&i, &m, &laws, &res.last.u, &res.last.states).unwrap();
+    let (bt, it) = (
+        std::fs::read_to_string(&b).unwrap(),
+        std::fs::read_to_string(&i).unwrap(),
+    );
+    std::fs::remove_dir_all(&dir).ok();
+    assert!(
+        bt.contains(&format!("NumberOfCells=\"{}\"", m.tets.len()))
+            && bt.contains("principal_stress")
+    );
+    assert!(it.contains("D_int") && it.contains("traction_ntn"));
+    assert!(!bt.contains("NaN") && !it.contains("NaN"));
 }

@@ -205,7 +205,7 @@ impl Default for SolverSettings {
             linear_solver: LinearSolverKind::Cholesky,
             ordering: Ordering::Metis,
             pcg_tolerance: 1e-8,
-            pcg_max_iterations: 60,
+            pcg_max_iterations: 20,
         }
     }
 }
