@@ -1,1 +1,16 @@
+//! The `ribbar` pipeline: CLI types, scene specs and overrides, the
+//! content-addressed store, the four stages, studies and post-processing.
+
+pub mod cli;
+pub mod commands;
+pub mod outputs;
+pub mod overrides;
 pub mod post;
+pub mod post_stage;
+pub mod progress;
+pub mod scene;
+pub mod solve_stage;
+pub mod stages;
+pub mod store;
+pub mod study;
+pub mod study_run;

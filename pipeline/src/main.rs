@@ -1,1 +1,82 @@
-fn main() {}
+//! The `ribbar` command line. Library crates return typed errors; here they
+//! are reported with their chain and a non-zero exit.
+
+use anyhow::{Context, Result};
+use clap::Parser;
+use pipeline::cli::{Cli, Command, SceneArgs};
+use pipeline::progress::{Printer, Verbosity};
+use pipeline::scene::Scene;
+use pipeline::stages::{self, Keys, StageStatus, STAGES};
+use pipeline::store::Store;
+use std::process::ExitCode;
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let verbosity = if cli.quiet {
+        Verbosity::Quiet
+    } else if cli.verbose {
+        Verbosity::Verbose
+    } else {
+        Verbosity::Normal
+    };
+    let printer = Printer::new(verbosity);
+    match dispatch(cli.command, &printer) {
+        Ok(code) => code,
+        Err(err) => {
+            printer.finish();
+            eprintln!("error: {err}");
+            for cause in err.chain().skip(1) {
+                eprintln!("  caused by: {cause}");
+            }
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// Which stages a stage command needs, in order.
+fn stages_up_to(last: &str) -> &'static [&'static str] {
+    let n = STAGES.iter().position(|s| *s == last).expect("known stage") + 1;
+    &STAGES[..n]
+}
+
+fn dispatch(command: Command, printer: &Printer) -> Result<ExitCode> {
+    match command {
+        Command::Geometry(a) => run_stages(&a, stages_up_to("geometry"), printer),
+        Command::Mesh(a) => run_stages(&a, stages_up_to("mesh"), printer),
+        Command::Solve(a) => run_stages(&a, stages_up_to("solve"), printer),
+        Command::Post(a) | Command::Run(a) => run_stages(&a, &STAGES, printer),
+        Command::Status(a) => status(&a),
+        Command::Clean(a) => pipeline::commands::clean(&a, printer),
+        Command::Material(a) => pipeline::commands::material(&a),
+        Command::Study(a) => pipeline::study_run::run(&a, printer),
+    }
+}
+
+fn run_stages(args: &SceneArgs, stages: &[&str], printer: &Printer) -> Result<ExitCode> {
+    let scene = Scene::load(&args.spec, &args.overrides)?;
+    pipeline::commands::run_scene(&scene, &args.work, stages, printer)?;
+    Ok(ExitCode::SUCCESS)
+}
+
+fn status(args: &SceneArgs) -> Result<ExitCode> {
+    let scene = Scene::load(&args.spec, &args.overrides)?;
+    let gmsh = geom::gmsh::Gmsh::locate().context("status needs gmsh's version for the keys")?;
+    let keys = Keys::of(&scene, gmsh.version());
+    let store = Store::new(&args.work);
+    let mut all_done = true;
+    for (stage, st) in stages::status(&store, &scene, &keys)? {
+        let text = match &st {
+            StageStatus::UpToDate => "up to date".to_string(),
+            StageStatus::Missing => "missing".to_string(),
+            StageStatus::Interrupted => "interrupted: `ribbar run` resumes it".to_string(),
+            StageStatus::Stale(changed) if changed.is_empty() => "stale (upstream changed)".to_string(),
+            StageStatus::Stale(changed) => format!("stale: changed {}", changed.join(", ")),
+        };
+        all_done &= st == StageStatus::UpToDate;
+        println!("{:<9} {}", stage, text);
+    }
+    if all_done {
+        println!("every stage is up to date");
+    }
+    Ok(ExitCode::SUCCESS)
+}

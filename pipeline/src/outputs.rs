@@ -1,0 +1,126 @@
+//! The `outputs` section of a scene spec: which fields, plots and summary
+//! quantities are produced. Only `outputs.fields` is read by the solve stage
+//! (fields need the state at their step, which only exists while solving);
+//! everything else is read by post alone, so changing it reruns post only.
+
+use geom::units::{Dim, RawQuantity};
+use serde::{Deserialize, Serialize};
+
+#[derive(Debug, Clone, Default, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawOutputs {
+    pub fields: Option<RawFields>,
+    /// FED up to which the energy under the σ_mb–FED curve is integrated (default 1 mm).
+    pub energy_fed_limit: Option<RawQuantity>,
+    /// Fraction of the final FED over which the residual σ_mb is averaged (default 0.2).
+    pub residual_fraction: Option<f64>,
+    /// Plot formats among png, svg (default both); empty list: no plots.
+    pub plots: Option<Vec<PlotFormat>>,
+}
+
+#[derive(Debug, Clone, Default, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawFields {
+    /// Converged step numbers at which VTU fields are written.
+    pub steps: Option<Vec<usize>>,
+    /// Also at the step of peak bond stress (default true).
+    pub at_peak: Option<bool>,
+    /// Also at the last converged step (default true).
+    pub at_end: Option<bool>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum PlotFormat {
+    Png,
+    Svg,
+}
+
+/// What the solve stage writes besides the curve.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct FieldRequest {
+    pub steps: Vec<usize>,
+    pub at_peak: bool,
+    pub at_end: bool,
+}
+
+/// What post produces.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct PostRequest {
+    /// m
+    pub energy_fed_limit: f64,
+    pub residual_fraction: f64,
+    pub plots: Vec<PlotFormat>,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Outputs {
+    pub fields: FieldRequest,
+    pub post: PostRequest,
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum OutputsError {
+    #[error(transparent)]
+    Unit(#[from] geom::units::UnitError),
+    #[error("{key}: {value} is out of range: {bound}")]
+    OutOfRange {
+        key: &'static str,
+        value: String,
+        bound: &'static str,
+    },
+}
+
+impl RawOutputs {
+    pub fn resolve(&self) -> Result<Outputs, OutputsError> {
+        let fields = self.fields.clone().unwrap_or_default();
+        let mut steps = fields.steps.unwrap_or_default();
+        steps.sort_unstable();
+        steps.dedup();
+        let energy_fed_limit = match &self.energy_fed_limit {
+            Some(q) => q.to_si(Dim::Length, "outputs.energy_fed_limit")?,
+            None => 1e-3,
+        };
+        if energy_fed_limit <= 0.0 {
+            return Err(OutputsError::OutOfRange {
+                key: "outputs.energy_fed_limit",
+                value: format!("{energy_fed_limit} m"),
+                bound: "must be > 0",
+            });
+        }
+        let residual_fraction = self.residual_fraction.unwrap_or(0.2);
+        if !(residual_fraction > 0.0 && residual_fraction <= 1.0) {
+            return Err(OutputsError::OutOfRange {
+                key: "outputs.residual_fraction",
+                value: residual_fraction.to_string(),
+                bound: "must be in (0, 1]",
+            });
+        }
+        let mut plots = self.plots.clone().unwrap_or(vec![PlotFormat::Png, PlotFormat::Svg]);
+        plots.dedup();
+        Ok(Outputs {
+            fields: FieldRequest {
+                steps,
+                at_peak: fields.at_peak.unwrap_or(true),
+                at_end: fields.at_end.unwrap_or(true),
+            },
+            post: PostRequest { energy_fed_limit, residual_fraction, plots },
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn defaults_and_bounds() {
+        let o = RawOutputs::default().resolve().unwrap();
+        assert_eq!(o.post.energy_fed_limit, 1e-3);
+        assert!(o.fields.at_peak && o.fields.at_end);
+        let raw: RawOutputs = serde_yaml::from_str("residual_fraction: 1.5").unwrap();
+        let err = raw.resolve().unwrap_err().to_string();
+        assert!(err.contains("outputs.residual_fraction"), "{err}");
+        assert!(serde_yaml::from_str::<RawOutputs>("plot: [png]").is_err());
+    }
+}

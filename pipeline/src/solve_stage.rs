@@ -1,0 +1,253 @@
+//! The solve stage: loads the mesh stage's model, builds the per-element
+//! laws, runs the pull-out (resuming from the in-progress checkpoint when
+//! there is one), and writes `curve.csv`, `solve.json`, the requested VTU
+//! fields and the interface traction profiles along the bar.
+
+use crate::stages::{Ctx, CHECKPOINT_FILE};
+use anyhow::Result;
+use geom::spec::NonAdhesive;
+use mesh::{InterfaceZone, Model};
+use solve::assembly::{ElementLaws, SharedBulkLaw, SharedInterfaceLaw};
+use solve::interface_element::{InterfaceKernel, INTERFACE_POINTS};
+use solve::laws::{InterfaceLaw, TangentKind};
+use solve::pullout::{Checkpoint, CommittedView, Cutback, CurveRow, Observer, SolveError, StepReport};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+/// Checkpoints are written at most this often: a large model's state is
+/// hundreds of MB, and a resumed run repeats at most this much work.
+const CHECKPOINT_INTERVAL: Duration = Duration::from_secs(20);
+
+pub fn element_laws(model: &Model, scene: &crate::scene::Scene) -> Result<ElementLaws> {
+    let materials = &scene.materials;
+    let steel: SharedBulkLaw = Arc::new(materials.steel.law());
+    let adhesive: SharedInterfaceLaw = Arc::new(materials.interface.law);
+    let free: Option<SharedInterfaceLaw> = match scene.specimen.non_adhesive {
+        NonAdhesive::Free => None,
+        NonAdhesive::Contact => Some(Arc::new(materials.interface.contact_law())),
+    };
+    ElementLaws::sized(
+        model,
+        |l| materials.concrete.at_size(l).map(|law| Arc::new(law) as SharedBulkLaw),
+        steel,
+        adhesive,
+        free,
+    )
+    .map_err(|(tet, e)| {
+        anyhow::anyhow!(
+            "materials.concrete: concrete tet {tet} (size l = {:.3} mm): {e}",
+            model.tet_size.get(tet).copied().unwrap_or(f64::NAN) * 1e3
+        )
+    })
+}
+
+fn curve_csv(rows: &[CurveRow]) -> Vec<u8> {
+    let mut out = b"step,u_imposed,force,fed,bond_stress,iterations\n".to_vec();
+    for r in rows {
+        let _ = writeln!(
+            out,
+            "{},{:e},{:e},{:e},{:e},{}",
+            r.step, r.u_imposed, r.force, r.fed, r.bond_stress, r.iterations
+        );
+    }
+    out
+}
+
+/// Mean interface tractions in axial bins along the adhesive zone, for the
+/// paper's Fig. 12 style profile: (z, t_n, t_t) per bin with elements.
+fn interface_profile(model: &Model, laws: &ElementLaws, view: &CommittedView<'_>) -> Vec<(f64, f64, f64)> {
+    let bins = 80usize;
+    let (z0, z1) = (0.0, model.adhesive_length);
+    let mut acc = vec![(0.0f64, 0.0f64, 0.0f64); bins];
+    for (i, e) in model.interfaces.iter().enumerate() {
+        if e.zone != InterfaceZone::Adhesive || laws.interfaces[i].is_none() {
+            continue;
+        }
+        let z = e.nodes[..3].iter().map(|&n| model.nodes[n as usize][2]).sum::<f64>() / 3.0;
+        let b = (((z - z0) / (z1 - z0)) * bins as f64).floor().clamp(0.0, bins as f64 - 1.0) as usize;
+        let law = laws.interfaces[i].as_ref().expect("checked above");
+        if let Some(t) = mean_traction(e, law.as_ref(), view.u, &view.states.interface[INTERFACE_POINTS * i..]) {
+            acc[b].0 += e.area;
+            acc[b].1 += e.area * t[0];
+            acc[b].2 += e.area * t[1];
+        }
+    }
+    acc.iter()
+        .enumerate()
+        .filter(|(_, a)| a.0 > 0.0)
+        .map(|(b, a)| (z0 + (b as f64 + 0.5) * (z1 - z0) / bins as f64, a.1 / a.0, a.2 / a.0))
+        .collect()
+}
+
+/// Local traction (t_n, t_t, t_h) of one interface element, averaged over
+/// its integration points, at the committed state.
+fn mean_traction(
+    e: &mesh::InterfaceElement,
+    law: &dyn InterfaceLaw,
+    u: &[f64],
+    states: &[solve::laws::InterfaceState],
+) -> Option<[f64; 3]> {
+    let k = InterfaceKernel::new(e);
+    let ue: [f64; 18] = std::array::from_fn(|i| u[3 * e.nodes[i / 3] as usize + i % 3]);
+    let mut t = [0.0; 3];
+    for (p, st) in states.iter().take(INTERFACE_POINTS).enumerate() {
+        let r = law.step(st, &k.local_jump(&ue, p), TangentKind::Secant).ok()?;
+        for c in 0..3 {
+            t[c] += r.traction[c] / INTERFACE_POINTS as f64;
+        }
+    }
+    Some(t)
+}
+
+struct StageObserver<'a> {
+    ctx: &'a Ctx<'a>,
+    laws: &'a ElementLaws,
+    checkpoint_path: PathBuf,
+    fields_dir: PathBuf,
+    profile: Vec<u8>,
+    last_checkpoint: Instant,
+    peak: f64,
+    error: Option<anyhow::Error>,
+    cutbacks: Vec<String>,
+}
+
+impl StageObserver<'_> {
+    fn write_fields(&mut self, name: &str, report: &StepReport, view: &CommittedView<'_>) -> Result<()> {
+        std::fs::create_dir_all(&self.fields_dir)?;
+        let model = view.model;
+        solve::fields::write_bulk_vtu(&self.fields_dir.join(format!("{name}_bulk.vtu")), model, self.laws, view.u, view.states)?;
+        solve::fields::write_interface_vtu(&self.fields_dir.join(format!("{name}_interface.vtu")), model, self.laws, view.u, view.states)?;
+        for (z, tn, tt) in interface_profile(model, self.laws, view) {
+            let _ = writeln!(self.profile, "{},{:e},{:e},{:e},{:e}", report.row.step, report.row.fed, z, tn, tt);
+        }
+        Ok(())
+    }
+}
+
+impl Observer for StageObserver<'_> {
+    fn step_converged(&mut self, report: &StepReport, view: &CommittedView<'_>) {
+        let r = &report.row;
+        self.ctx.printer.progress(&format!(
+            "solve: step {:>4}  u = {:.4} mm  FED = {:.4} mm  σ_mb = {:.3} MPa  iterations {}",
+            r.step,
+            r.u_imposed * 1e3,
+            r.fed * 1e3,
+            r.bond_stress / 1e6,
+            r.iterations
+        ));
+        if self.error.is_some() {
+            return;
+        }
+        let request = &self.ctx.scene.outputs.fields;
+        let mut result = Ok(());
+        if request.steps.contains(&r.step) {
+            result = self.write_fields(&format!("step{:04}", r.step), report, view);
+        }
+        if request.at_peak && r.bond_stress > self.peak && result.is_ok() {
+            self.peak = r.bond_stress;
+            result = self.write_fields("peak", report, view);
+        }
+        if result.is_ok() && self.last_checkpoint.elapsed() >= CHECKPOINT_INTERVAL {
+            result = (view.checkpoint)().save(&self.checkpoint_path).map_err(Into::into);
+            self.last_checkpoint = Instant::now();
+        }
+        if let Err(e) = result {
+            self.error = Some(e);
+        }
+    }
+
+    fn cutback(&mut self, event: &Cutback) {
+        let text = format!(
+            "step {} at u = {:.4e} m: {}; step {:.3e} → {:.3e} m",
+            event.step, event.u_imposed, event.reason, event.failed_step_size, event.next_step_size
+        );
+        self.ctx.printer.detail(&format!("solve: cut back: {text}"));
+        self.cutbacks.push(text);
+    }
+}
+
+pub fn run(ctx: &Ctx, mesh_dir: &Path, out: &Path) -> Result<()> {
+    let model = Model::load(&mesh_dir.join(mesh::MODEL_FILE))?;
+    let laws = element_laws(&model, ctx.scene)?;
+    let checkpoint_path = out.join(CHECKPOINT_FILE);
+    let checkpoint = if checkpoint_path.is_file() {
+        match Checkpoint::load(&checkpoint_path) {
+            Ok(cp) => {
+                ctx.printer.line(&format!(
+                    "solve: resuming after step {} (u = {:.4} mm)",
+                    cp.rows.len(),
+                    cp.u_imposed * 1e3
+                ));
+                Some(cp)
+            }
+            Err(e) => {
+                ctx.printer.line(&format!("solve: ignoring the unusable checkpoint ({e}); starting over"));
+                None
+            }
+        }
+    } else {
+        None
+    };
+    let mut observer = StageObserver {
+        ctx,
+        laws: &laws,
+        checkpoint_path: checkpoint_path.clone(),
+        fields_dir: out.join("fields"),
+        profile: b"step,fed,z,normal,shear\n".to_vec(),
+        last_checkpoint: Instant::now(),
+        peak: f64::NEG_INFINITY,
+        error: None,
+        cutbacks: Vec::new(),
+    };
+    let outcome = solve::pullout::solve_pullout(
+        &model,
+        &laws,
+        &ctx.scene.loading,
+        &ctx.scene.solver,
+        checkpoint,
+        &mut observer,
+    );
+    ctx.printer.finish();
+    if let Some(e) = observer.error.take() {
+        return Err(e.context("writing solve outputs"));
+    }
+    let (result, stopped) = match outcome {
+        Ok(result) => (result, None),
+        Err(SolveError::Stalled { partial, step, u_imposed, residual_history, cause, step_size }) => {
+            let why = format!(
+                "step {step} did not converge at the minimum step size {step_size:e} m (imposed u = {u_imposed:e} m); \
+                 residual history {residual_history:?}; likely cause: {cause}"
+            );
+            (*partial, Some(why))
+        }
+        Err(e) => return Err(e.into()),
+    };
+    if ctx.scene.outputs.fields.at_end {
+        let last = result.rows.last().copied();
+        if let Some(row) = last {
+            let cp = &result.last;
+            let view = CommittedView { model: &model, laws: &laws, checkpoint: &|| cp.clone(), u: &cp.u, states: &cp.states };
+            let report = StepReport { row, step_size: 0.0, times: Default::default() };
+            observer.write_fields("end", &report, &view)?;
+        }
+    }
+    crate::store::write_atomic(&out.join("curve.csv"), &curve_csv(&result.rows))?;
+    crate::store::write_atomic(&out.join("interface_profile.csv"), &observer.profile)?;
+    let solve_json = serde_json::json!({
+        "summary": result.summary,
+        "completed": stopped.is_none(),
+        "stopped": stopped,
+        "cutbacks": observer.cutbacks,
+    });
+    crate::store::write_atomic(&out.join("solve.json"), &serde_json::to_vec_pretty(&solve_json)?)?;
+    let _ = std::fs::remove_file(&checkpoint_path);
+    if let Some(why) = &stopped {
+        // The converged part is a result like any other (a rerun with the
+        // same inputs would stop at the same step): it is committed, post
+        // runs on it, and `run` exits non-zero while it stands.
+        ctx.printer.line(&format!("solve: stopped early: {why}"));
+    }
+    Ok(())
+}

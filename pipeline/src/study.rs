@@ -1,0 +1,215 @@
+//! Studies: a base scene spec plus lists of values for any keys, expanded
+//! into cases (cartesian product or zipped lists), or a mesh-convergence
+//! series over one size key.
+//!
+//! ```yaml
+//! name: r1-delta-s
+//! base: ../r1-coarse.yaml           # relative to this file
+//! kind: sweep                       # sweep (default) | convergence
+//! combine: product                  # product (default) | zip
+//! parameters:
+//!   materials.interface.delta_s: [0.02, 0.16, 0.5, 1.0]
+//! ```
+//! A case is the base spec with `--set key=value` overrides and the scene
+//! name `<study>--<index>`; its stages share the store with every other case,
+//! so cases that agree on a stage's inputs share that stage's artifacts.
+
+use serde::Deserialize;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum StudyKind {
+    #[default]
+    Sweep,
+    Convergence,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum Combine {
+    #[default]
+    Product,
+    Zip,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawStudy {
+    pub name: String,
+    pub base: PathBuf,
+    #[serde(default)]
+    pub kind: StudyKind,
+    #[serde(default)]
+    pub combine: Combine,
+    /// Dotted spec key → list of values. Ordered as written.
+    pub parameters: serde_yaml::Mapping,
+    /// Extra overrides applied to every case.
+    #[serde(default)]
+    pub set: BTreeMap<String, serde_yaml::Value>,
+}
+
+/// One case of a study.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Case {
+    pub index: usize,
+    pub name: String,
+    /// (key, value as given) of the swept parameters.
+    pub parameters: Vec<(String, serde_yaml::Value)>,
+    /// All `--set` arguments of the case, name included.
+    pub overrides: Vec<String>,
+}
+
+#[derive(Debug, Clone)]
+pub struct Study {
+    pub name: String,
+    pub kind: StudyKind,
+    /// The base spec, resolved against the study file's directory.
+    pub base: PathBuf,
+    pub keys: Vec<String>,
+    pub cases: Vec<Case>,
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum StudyError {
+    #[error("{path}: cannot read the study: {source}")]
+    Read {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("{path}: {message}")]
+    Invalid { path: PathBuf, message: String },
+}
+
+/// A value as it goes on the command line after `key=`: YAML flow form.
+pub fn value_arg(v: &serde_yaml::Value) -> String {
+    match v {
+        serde_yaml::Value::String(s) => format!("{s:?}"),
+        other => serde_yaml::to_string(other).unwrap_or_default().trim().to_string(),
+    }
+}
+
+impl Study {
+    pub fn load(path: &Path) -> Result<Study, StudyError> {
+        let text = std::fs::read_to_string(path)
+            .map_err(|source| StudyError::Read { path: path.to_path_buf(), source })?;
+        let invalid = |message: String| StudyError::Invalid { path: path.to_path_buf(), message };
+        let raw: RawStudy = serde_yaml::from_str(&text).map_err(|e| invalid(e.to_string()))?;
+        if raw.name.is_empty()
+            || !raw.name.chars().all(|c| c.is_ascii_alphanumeric() || matches!(c, '-' | '_' | '.'))
+        {
+            return Err(invalid(format!(
+                "name: {:?} must be letters, digits, '-', '_' or '.'",
+                raw.name
+            )));
+        }
+        let base = path.parent().unwrap_or(Path::new(".")).join(&raw.base);
+        if !base.is_file() {
+            return Err(invalid(format!("base: {} is not a file", base.display())));
+        }
+        let mut keys = Vec::new();
+        let mut lists = Vec::new();
+        for (k, v) in &raw.parameters {
+            let key = k
+                .as_str()
+                .ok_or_else(|| invalid(format!("parameters: key {k:?} is not a dotted spec key")))?
+                .to_string();
+            let values = v
+                .as_sequence()
+                .filter(|s| !s.is_empty())
+                .ok_or_else(|| invalid(format!("parameters.{key}: expected a non-empty list of values")))?
+                .clone();
+            keys.push(key);
+            lists.push(values);
+        }
+        if keys.is_empty() {
+            return Err(invalid("parameters: at least one key with a list of values".into()));
+        }
+        if raw.kind == StudyKind::Convergence && keys.len() != 1 {
+            return Err(invalid(format!(
+                "parameters: a convergence study varies one size key (e.g. mesh.h_interface), found {}",
+                keys.len()
+            )));
+        }
+        if raw.kind == StudyKind::Convergence && lists[0].len() < 3 {
+            return Err(invalid(format!(
+                "parameters.{}: a convergence study needs at least 3 grids, found {}",
+                keys[0],
+                lists[0].len()
+            )));
+        }
+        let combos: Vec<Vec<serde_yaml::Value>> = match raw.combine {
+            Combine::Zip => {
+                let n = lists[0].len();
+                if let Some((k, l)) = keys.iter().zip(&lists).find(|(_, l)| l.len() != n) {
+                    return Err(invalid(format!(
+                        "parameters.{k}: zipped lists must have equal lengths ({} vs {n})",
+                        l.len()
+                    )));
+                }
+                (0..n).map(|i| lists.iter().map(|l| l[i].clone()).collect()).collect()
+            }
+            Combine::Product => lists.iter().fold(vec![Vec::new()], |acc, list| {
+                acc.iter()
+                    .flat_map(|prefix| {
+                        list.iter().map(move |v| {
+                            let mut c = prefix.clone();
+                            c.push(v.clone());
+                            c
+                        })
+                    })
+                    .collect()
+            }),
+        };
+        let common: Vec<String> =
+            raw.set.iter().map(|(k, v)| format!("{k}={}", value_arg(v))).collect();
+        let cases = combos
+            .into_iter()
+            .enumerate()
+            .map(|(index, values)| {
+                let name = format!("{}--{index}", raw.name);
+                let parameters: Vec<(String, serde_yaml::Value)> =
+                    keys.iter().cloned().zip(values).collect();
+                let mut overrides = common.clone();
+                overrides.extend(parameters.iter().map(|(k, v)| format!("{k}={}", value_arg(v))));
+                overrides.push(format!("name={name}"));
+                Case { index, name, parameters, overrides }
+            })
+            .collect();
+        Ok(Study { name: raw.name, kind: raw.kind, base, keys, cases })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
+        std::fs::create_dir_all(dir).unwrap();
+        let p = dir.join(name);
+        std::fs::write(&p, text).unwrap();
+        p
+    }
+
+    #[test]
+    fn product_and_zip_expand_cases_with_names_and_overrides() {
+        let dir = std::env::temp_dir().join(format!("ribbar-study-test-{}", std::process::id()));
+        write(&dir, "base.yaml", "name: b\n");
+        let p = write(
+            &dir,
+            "s.yaml",
+            "name: s\nbase: base.yaml\nparameters:\n  a.b: [1, 2]\n  c: [\"60 deg\", x, y]\n",
+        );
+        let s = Study::load(&p).unwrap();
+        assert_eq!(s.cases.len(), 6);
+        assert_eq!(s.cases[1].overrides, vec!["a.b=1", "c=\"x\"", "name=s--1"]);
+        let p = write(&dir, "z.yaml", "name: z\nbase: base.yaml\ncombine: zip\nparameters:\n  a: [1, 2]\n  c: [3, 4, 5]\n");
+        let err = Study::load(&p).unwrap_err().to_string();
+        assert!(err.contains("parameters.c") && err.contains("equal lengths"), "{err}");
+        let p = write(&dir, "c.yaml", "name: c\nbase: base.yaml\nkind: convergence\nparameters:\n  mesh.h_interface: [1, 2]\n");
+        assert!(Study::load(&p).unwrap_err().to_string().contains("at least 3 grids"));
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}
