@@ -203,7 +203,11 @@ pub fn build_model(
         if in_steel[i] || in_concrete[i] {
             new_id[i] = nodes.len() as u32;
             nodes.push(raw.nodes[i]);
-            node_region.push(if in_steel[i] { Region::Steel } else { Region::Concrete });
+            node_region.push(if in_steel[i] {
+                Region::Steel
+            } else {
+                Region::Concrete
+            });
         }
     }
     let mut twin = vec![u32::MAX; n_raw];
@@ -233,7 +237,10 @@ pub fn build_model(
             let p = t.map(|i| raw.nodes[i as usize]);
             let v = tet_volume(p);
             if v == 0.0 || !v.is_finite() {
-                return Err(topo(format!("{name} tet {k} (nodes {:?}) has zero volume", t.map(|i| raw.node_tags[i as usize]))));
+                return Err(topo(format!(
+                    "{name} tet {k} (nodes {:?}) has zero volume",
+                    t.map(|i| raw.node_tags[i as usize])
+                )));
             }
             if v < 0.0 {
                 reoriented += 1;
@@ -259,9 +266,15 @@ pub fn build_model(
         }
     }
     let mut zone_of: HashMap<[u32; 3], InterfaceZone> = HashMap::new();
-    for (g, zone) in [("interface_adhesive", InterfaceZone::Adhesive), ("interface_free", InterfaceZone::Free)] {
+    for (g, zone) in [
+        ("interface_adhesive", InterfaceZone::Adhesive),
+        ("interface_free", InterfaceZone::Free),
+    ] {
         for tri in raw.surfaces.get(g).unwrap_or(&empty) {
-            if zone_of.insert(sorted3(*tri), zone).is_some_and(|z| z != zone) {
+            if zone_of
+                .insert(sorted3(*tri), zone)
+                .is_some_and(|z| z != zone)
+            {
                 return Err(topo(format!("an interface triangle is in both interface_adhesive and interface_free (nodes {:?})", tri.map(|i| raw.node_tags[i as usize]))));
             }
         }
@@ -272,7 +285,9 @@ pub fn build_model(
         for face in TET_FACES.iter() {
             let tri = face.map(|j| t[j]);
             let key = sorted3(tri);
-            let Some(&(ks, fs)) = steel_faces.get(&key) else { continue };
+            let Some(&(ks, fs)) = steel_faces.get(&key) else {
+                continue;
+            };
             let zone = *zone_of.get(&key).ok_or_else(|| {
                 let c = centroid(&raw.nodes, &tri);
                 topo(format!(
@@ -354,7 +369,11 @@ pub fn build_model(
                         return Err(topo(format!(
                             "node {} of physical surface \"{group}\" belongs to no {} tet",
                             raw.node_tags[i as usize],
-                            if side == Region::Steel { "steel" } else { "concrete" }
+                            if side == Region::Steel {
+                                "steel"
+                            } else {
+                                "concrete"
+                            }
                         )))
                     }
                 };
@@ -377,8 +396,14 @@ pub fn build_model(
         nodes: nodes.len(),
         tets_steel: steel.len(),
         tets_concrete: concrete.len(),
-        interface_elements_adhesive: interfaces.iter().filter(|e| e.zone == InterfaceZone::Adhesive).count(),
-        interface_elements_free: interfaces.iter().filter(|e| e.zone == InterfaceZone::Free).count(),
+        interface_elements_adhesive: interfaces
+            .iter()
+            .filter(|e| e.zone == InterfaceZone::Adhesive)
+            .count(),
+        interface_elements_free: interfaces
+            .iter()
+            .filter(|e| e.zone == InterfaceZone::Free)
+            .count(),
         duplicated_nodes: duplicated,
         reoriented_tets: reoriented,
         min_quality: quality.iter().copied().fold(f64::INFINITY, f64::min),
@@ -386,8 +411,16 @@ pub fn build_model(
         tets_quality_below_0_1: quality.iter().filter(|&&q| q < 0.1).count(),
         min_size_m: tet_size.iter().copied().fold(f64::INFINITY, f64::min),
         max_size_m: tet_size.iter().copied().fold(0.0, f64::max),
-        interface_area_adhesive_m2: interfaces.iter().filter(|e| e.zone == InterfaceZone::Adhesive).map(|e| e.area).sum(),
-        interface_area_free_m2: interfaces.iter().filter(|e| e.zone == InterfaceZone::Free).map(|e| e.area).sum(),
+        interface_area_adhesive_m2: interfaces
+            .iter()
+            .filter(|e| e.zone == InterfaceZone::Adhesive)
+            .map(|e| e.area)
+            .sum(),
+        interface_area_free_m2: interfaces
+            .iter()
+            .filter(|e| e.zone == InterfaceZone::Free)
+            .map(|e| e.area)
+            .sum(),
         volume_steel_m3: vol_s,
         volume_concrete_m3: vol_c,
         ..Default::default()
@@ -427,11 +460,19 @@ pub fn make_frame(n: V3, centre: V3) -> Frame {
         t = project([centre[0], centre[1], 0.0]);
         if norm(t) < 1e-12 * (1.0 + norm(centre)) {
             // On the axis itself: any direction in the plane.
-            t = project(if n[0].abs() < 0.9 { [1.0, 0.0, 0.0] } else { [0.0, 1.0, 0.0] });
+            t = project(if n[0].abs() < 0.9 {
+                [1.0, 0.0, 0.0]
+            } else {
+                [0.0, 1.0, 0.0]
+            });
         }
     }
     let t = scale(t, 1.0 / norm(t));
-    Frame { n, t, h: cross(n, t) }
+    Frame {
+        n,
+        t,
+        h: cross(n, t),
+    }
 }
 
 #[cfg(test)]

@@ -127,4 +127,3 @@ pub fn run_gmsh(
         seconds: start.elapsed().as_secs_f64(),
     })
 }
-

@@ -116,7 +116,9 @@ pub fn mesh_specimen(
     let write = |path: &Path, bytes: &[u8]| -> Result<(), MeshError> {
         use std::io::Write;
         let mut f = std::fs::File::create(path).map_err(|e| MeshError::io(path, e))?;
-        f.write_all(bytes).and_then(|_| f.sync_all()).map_err(|e| MeshError::io(path, e))
+        f.write_all(bytes)
+            .and_then(|_| f.sync_all())
+            .map_err(|e| MeshError::io(path, e))
     };
     model.save(&temps.0[1])?;
     write(&temps.0[2], &vtu::model_vtu(&model))?;

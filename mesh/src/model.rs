@@ -116,7 +116,11 @@ impl Model {
     pub fn check(&self) -> Result<(), String> {
         let n = self.nodes.len();
         if self.node_region.len() != n {
-            return Err(format!("{} node regions for {} nodes", self.node_region.len(), n));
+            return Err(format!(
+                "{} node regions for {} nodes",
+                self.node_region.len(),
+                n
+            ));
         }
         let m = self.tets.len();
         if self.tet_region.len() != m || self.tet_size.len() != m {

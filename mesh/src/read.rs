@@ -58,7 +58,9 @@ impl<'a> Cursor<'a> {
             self.pos += 1;
         }
         if start == self.pos {
-            return Err(format!("file ends where {what} was expected (byte {start})"));
+            return Err(format!(
+                "file ends where {what} was expected (byte {start})"
+            ));
         }
         std::str::from_utf8(&self.data[start..self.pos])
             .map_err(|_| format!("non-text bytes where {what} was expected (byte {start})"))
@@ -85,8 +87,12 @@ impl<'a> Cursor<'a> {
             })
         } else {
             let t = self.token(what)?;
-            t.parse()
-                .map_err(|_| format!("{what}: {t:?} is not an unsigned integer (byte {})", self.pos))
+            t.parse().map_err(|_| {
+                format!(
+                    "{what}: {t:?} is not an unsigned integer (byte {})",
+                    self.pos
+                )
+            })
         }
     }
     fn int(&mut self, what: &str) -> ScanResult<i32> {
@@ -168,7 +174,9 @@ fn scan(data: &[u8]) -> ScanResult<Scan> {
             return Err("big-endian binary files are not supported".into());
         }
     } else if file_type != 0 {
-        return Err(format!("file type {file_type} is neither ASCII (0) nor binary (1)"));
+        return Err(format!(
+            "file type {file_type} is neither ASCII (0) nor binary (1)"
+        ));
     }
     c.expect_line("$EndMeshFormat")?;
 
@@ -186,7 +194,9 @@ fn scan(data: &[u8]) -> ScanResult<Scan> {
         let start = c.pos;
         let section = c.token("a section header")?;
         if !section.starts_with('$') {
-            return Err(format!("expected a $Section header at byte {start}, found {section:?}"));
+            return Err(format!(
+                "expected a $Section header at byte {start}, found {section:?}"
+            ));
         }
         let name = section[1..].to_string();
         // Section contents are binary in binary files except $PhysicalNames.
@@ -207,7 +217,10 @@ fn scan(data: &[u8]) -> ScanResult<Scan> {
                         .iter()
                         .position(|&b| b == b'\n')
                         .ok_or("file ends inside $PhysicalNames")?;
-                    let name = String::from_utf8_lossy(&rest[..end]).trim().trim_matches('"').to_string();
+                    let name = String::from_utf8_lossy(&rest[..end])
+                        .trim()
+                        .trim_matches('"')
+                        .to_string();
                     c.pos += end;
                     out.physical_names.insert((dim, tag), name);
                 }
@@ -251,7 +264,10 @@ fn scan(data: &[u8]) -> ScanResult<Scan> {
                     c.int("node block dimension")?;
                     c.int("node block entity tag")?;
                     if c.int("node block parametric flag")? != 0 {
-                        return Err(format!("node block {} has parametric coordinates (not read)", b + 1));
+                        return Err(format!(
+                            "node block {} has parametric coordinates (not read)",
+                            b + 1
+                        ));
                     }
                     let n = c.size("number of nodes in block")?;
                     c.check_count(n, "number of nodes in block")?;
@@ -264,7 +280,9 @@ fn scan(data: &[u8]) -> ScanResult<Scan> {
                     out.node_block_tags.push(tags);
                 }
                 if count != total {
-                    return Err(format!("$Nodes announces {total} nodes, its blocks hold {count}"));
+                    return Err(format!(
+                        "$Nodes announces {total} nodes, its blocks hold {count}"
+                    ));
                 }
             }
             "Elements" => {
@@ -357,17 +375,18 @@ pub fn parse_msh(data: &[u8], path: &Path) -> Result<RawMesh, MeshError> {
                 .begin_msh_errors()
                 .next()
                 .map(|(rest, _)| data.len() - rest.len());
-            let msgs: Vec<String> = e
-                .filter_msh_errors()
-                .map(|(_, k)| k.to_string())
-                .collect();
+            let msgs: Vec<String> = e.filter_msh_errors().map(|(_, k)| k.to_string()).collect();
             format!("{} (byte {:?})", msgs.join("; "), offset)
         })
     })
     .map_err(|_| corrupt(path, "the .msh parser failed on malformed data"))?
     .map_err(|d| corrupt(path, d))?;
 
-    let nodes_sec = parsed.data.nodes.as_ref().ok_or_else(|| corrupt(path, "no $Nodes section"))?;
+    let nodes_sec = parsed
+        .data
+        .nodes
+        .as_ref()
+        .ok_or_else(|| corrupt(path, "no $Nodes section"))?;
     if nodes_sec.node_blocks.len() != scan.node_block_tags.len() {
         return Err(corrupt(path, "node blocks differ between scans"));
     }
@@ -385,7 +404,8 @@ pub fn parse_msh(data: &[u8], path: &Path) -> Result<RawMesh, MeshError> {
     if nodes.len() >= u32::MAX as usize {
         return Err(corrupt(path, "too many nodes for 32-bit indices"));
     }
-    let index = TagIndex::new(&node_tags).map_err(|tag| corrupt(path, format!("node tag {tag} is defined twice")))?;
+    let index = TagIndex::new(&node_tags)
+        .map_err(|tag| corrupt(path, format!("node tag {tag} is defined twice")))?;
 
     // Entity (dim, tag) → physical group names.
     let mut entity_groups: HashMap<(i32, i32), Vec<String>> = HashMap::new();
@@ -394,7 +414,10 @@ pub fn parse_msh(data: &[u8], path: &Path) -> Result<RawMesh, MeshError> {
             for p in phys {
                 // gmsh writes negative physical tags for reversed orientation.
                 if let Some(name) = scan.physical_names.get(&(dim, p.abs())) {
-                    entity_groups.entry((dim, tag)).or_default().push(name.clone());
+                    entity_groups
+                        .entry((dim, tag))
+                        .or_default()
+                        .push(name.clone());
                 }
             }
         };
@@ -412,7 +435,11 @@ pub fn parse_msh(data: &[u8], path: &Path) -> Result<RawMesh, MeshError> {
         node_tags,
         ..Default::default()
     };
-    let elements = parsed.data.elements.as_ref().ok_or_else(|| corrupt(path, "no $Elements section"))?;
+    let elements = parsed
+        .data
+        .elements
+        .as_ref()
+        .ok_or_else(|| corrupt(path, "no $Elements section"))?;
     for block in &elements.element_blocks {
         let Some(groups) = entity_groups.get(&(block.entity_dim, block.entity_tag)) else {
             continue;
@@ -454,7 +481,14 @@ fn map_nodes<const N: usize>(
     group: &str,
 ) -> Result<[u32; N], MeshError> {
     if e.nodes.len() != N {
-        return Err(corrupt(path, format!("element {} has {} nodes, expected {N}", e.element_tag, e.nodes.len())));
+        return Err(corrupt(
+            path,
+            format!(
+                "element {} has {} nodes, expected {N}",
+                e.element_tag,
+                e.nodes.len()
+            ),
+        ));
     }
     let mut out = [0u32; N];
     for (o, &tag) in out.iter_mut().zip(&e.nodes) {

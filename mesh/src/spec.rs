@@ -137,7 +137,10 @@ impl RawMeshSpec {
             None => d.timeout,
         };
         if h_interface <= 0.0 {
-            return Err(bad("h_interface", format!("must be > 0 m, got {h_interface} m")));
+            return Err(bad(
+                "h_interface",
+                format!("must be > 0 m, got {h_interface} m"),
+            ));
         }
         if h_outer <= 0.0 {
             return Err(bad("h_outer", format!("must be > 0 m, got {h_outer} m")));
@@ -197,9 +200,17 @@ mod tests {
         let e = raw.resolve().unwrap_err().to_string();
         assert!(e.contains("mesh.h_outer"), "{e}");
         let raw: RawMeshSpec = serde_yaml::from_str("h_interface: 2 mm\nh_outer: 1 mm").unwrap();
-        assert!(raw.resolve().unwrap_err().to_string().contains("mesh.h_outer"));
+        assert!(raw
+            .resolve()
+            .unwrap_err()
+            .to_string()
+            .contains("mesh.h_outer"));
         let raw: RawMeshSpec = serde_yaml::from_str("threads: 0").unwrap();
-        assert!(raw.resolve().unwrap_err().to_string().contains("mesh.threads"));
+        assert!(raw
+            .resolve()
+            .unwrap_err()
+            .to_string()
+            .contains("mesh.threads"));
         assert!(serde_yaml::from_str::<RawMeshSpec>("algorithm_3d: fast").is_err());
     }
 
@@ -207,7 +218,8 @@ mod tests {
     #[test]
     fn optimize_and_timeout() {
         let raw: RawMeshSpec =
-            serde_yaml::from_str("optimize: false\ntimeout: 2 min\nalgorithm_3d: delaunay").unwrap();
+            serde_yaml::from_str("optimize: false\ntimeout: 2 min\nalgorithm_3d: delaunay")
+                .unwrap();
         let s = raw.resolve().unwrap();
         assert_eq!(s.optimize, Optimize::None);
         assert_eq!(s.timeout, 120.0);

@@ -14,30 +14,69 @@ pub fn model_vtu(model: &Model) -> Vec<u8> {
     let mut arrays: Vec<(String, Vec<u8>)> = Vec::new();
     let mut push = |header: String, data: Vec<u8>| arrays.push((header, data));
 
-    let points: Vec<u8> = model.nodes.iter().flat_map(|p| p.iter().flat_map(|x| x.to_le_bytes())).collect();
-    push(r#"<DataArray type="Float64" NumberOfComponents="3" format="appended" offset="{}"/>"#.into(), points);
-    let conn: Vec<u8> = model.tets.iter().flat_map(|t| t.iter().flat_map(|&i| (i as i64).to_le_bytes())).collect();
-    push(r#"<DataArray type="Int64" Name="connectivity" format="appended" offset="{}"/>"#.into(), conn);
-    let offsets: Vec<u8> = (1..=model.tets.len() as i64).flat_map(|k| (4 * k).to_le_bytes()).collect();
-    push(r#"<DataArray type="Int64" Name="offsets" format="appended" offset="{}"/>"#.into(), offsets);
-    push(r#"<DataArray type="UInt8" Name="types" format="appended" offset="{}"/>"#.into(), vec![VTK_TETRA; model.tets.len()]);
+    let points: Vec<u8> = model
+        .nodes
+        .iter()
+        .flat_map(|p| p.iter().flat_map(|x| x.to_le_bytes()))
+        .collect();
+    push(
+        r#"<DataArray type="Float64" NumberOfComponents="3" format="appended" offset="{}"/>"#
+            .into(),
+        points,
+    );
+    let conn: Vec<u8> = model
+        .tets
+        .iter()
+        .flat_map(|t| t.iter().flat_map(|&i| (i as i64).to_le_bytes()))
+        .collect();
+    push(
+        r#"<DataArray type="Int64" Name="connectivity" format="appended" offset="{}"/>"#.into(),
+        conn,
+    );
+    let offsets: Vec<u8> = (1..=model.tets.len() as i64)
+        .flat_map(|k| (4 * k).to_le_bytes())
+        .collect();
+    push(
+        r#"<DataArray type="Int64" Name="offsets" format="appended" offset="{}"/>"#.into(),
+        offsets,
+    );
+    push(
+        r#"<DataArray type="UInt8" Name="types" format="appended" offset="{}"/>"#.into(),
+        vec![VTK_TETRA; model.tets.len()],
+    );
     let region: Vec<u8> = model
         .tet_region
         .iter()
-        .flat_map(|r| match r {
-            Region::Steel => 1i32,
-            Region::Concrete => 2i32,
-        }.to_le_bytes())
+        .flat_map(|r| {
+            match r {
+                Region::Steel => 1i32,
+                Region::Concrete => 2i32,
+            }
+            .to_le_bytes()
+        })
         .collect();
-    push(r#"<DataArray type="Int32" Name="region" format="appended" offset="{}"/>"#.into(), region);
+    push(
+        r#"<DataArray type="Int32" Name="region" format="appended" offset="{}"/>"#.into(),
+        region,
+    );
     let quality: Vec<u8> = model
         .tets
         .iter()
         .flat_map(|t| tet_quality(t.map(|i| model.nodes[i as usize])).to_le_bytes())
         .collect();
-    push(r#"<DataArray type="Float64" Name="quality" format="appended" offset="{}"/>"#.into(), quality);
-    let size: Vec<u8> = model.tet_size.iter().flat_map(|s| s.to_le_bytes()).collect();
-    push(r#"<DataArray type="Float64" Name="size" format="appended" offset="{}"/>"#.into(), size);
+    push(
+        r#"<DataArray type="Float64" Name="quality" format="appended" offset="{}"/>"#.into(),
+        quality,
+    );
+    let size: Vec<u8> = model
+        .tet_size
+        .iter()
+        .flat_map(|s| s.to_le_bytes())
+        .collect();
+    push(
+        r#"<DataArray type="Float64" Name="size" format="appended" offset="{}"/>"#.into(),
+        size,
+    );
 
     let mut offset = 0usize;
     let mut headers = Vec::new();
@@ -55,7 +94,10 @@ pub fn model_vtu(model: &Model) -> Vec<u8> {
         model.tets.len()
     ));
     out.push_str(&format!("<Points>\n{}\n</Points>\n", headers[0]));
-    out.push_str(&format!("<Cells>\n{}\n{}\n{}\n</Cells>\n", headers[1], headers[2], headers[3]));
+    out.push_str(&format!(
+        "<Cells>\n{}\n{}\n{}\n</Cells>\n",
+        headers[1], headers[2], headers[3]
+    ));
     out.push_str(&format!(
         "<CellData Scalars=\"region\">\n{}\n{}\n{}\n</CellData>\n",
         headers[4], headers[5], headers[6]

@@ -22,7 +22,11 @@ fn read_bytes(dir: &Path, name: &str, bytes: &[u8]) -> Result<mesh::RawMesh, Mes
 fn broken_geo_shows_gmsh_error() {
     let dir = scratch("broken_geo");
     let geo = dir.join("broken.geo");
-    std::fs::write(&geo, "SetFactory(\"OpenCASCADE\");\nBox(1) = {0, 0, 0, 1, 1;\n").unwrap();
+    std::fs::write(
+        &geo,
+        "SetFactory(\"OpenCASCADE\");\nBox(1) = {0, 0, 0, 1, 1;\n",
+    )
+    .unwrap();
     let err = mesh::run_gmsh(gmsh(), &geo, &small_spec(0.001), &dir.join("x.msh")).unwrap_err();
     let msg = err.to_string();
     assert!(matches!(err, MeshError::GmshFailed { .. }), "{err:?}");
@@ -33,15 +37,27 @@ fn broken_geo_shows_gmsh_error() {
 #[test]
 fn missing_geo_is_named() {
     let dir = scratch("missing_geo");
-    let err = mesh::run_gmsh(gmsh(), &dir.join("nope.geo"), &small_spec(0.001), &dir.join("x.msh")).unwrap_err();
-    assert!(matches!(err, MeshError::Io { .. }) && err.to_string().contains("nope.geo"), "{err}");
+    let err = mesh::run_gmsh(
+        gmsh(),
+        &dir.join("nope.geo"),
+        &small_spec(0.001),
+        &dir.join("x.msh"),
+    )
+    .unwrap_err();
+    assert!(
+        matches!(err, MeshError::Io { .. }) && err.to_string().contains("nope.geo"),
+        "{err}"
+    );
 }
 
 /// gmsh exceeding mesh.timeout is killed and reported (SPEC §4).
 #[test]
 fn timeout_is_reported() {
     let dir = scratch("timeout");
-    let spec = MeshSpec { timeout: 0.01, ..small_spec(0.0004) };
+    let spec = MeshSpec {
+        timeout: 0.01,
+        ..small_spec(0.0004)
+    };
     let err = mesh::run_gmsh(gmsh(), &data("smooth.geo"), &spec, &dir.join("x.msh")).unwrap_err();
     assert!(matches!(err, MeshError::GmshTimeout { .. }), "{err:?}");
     assert!(err.to_string().contains("mesh.timeout"));
@@ -55,7 +71,10 @@ fn truncated_msh_is_an_error() {
     for k in 1..40 {
         let cut = bytes.len() * k / 40;
         let err = read_bytes(&dir, "cut.msh", &bytes[..cut]).unwrap_err();
-        assert!(matches!(err, MeshError::MshCorrupt { .. }), "cut at {cut}: {err:?}");
+        assert!(
+            matches!(err, MeshError::MshCorrupt { .. }),
+            "cut at {cut}: {err:?}"
+        );
         assert!(err.to_string().contains("cut.msh"), "{err}");
     }
     assert!(read_bytes(&dir, "empty.msh", b"").is_err());
@@ -89,7 +108,10 @@ fn corrupt_msh_is_an_error() {
     let last_node = end - 1 - 8;
     b[last_node..last_node + 8].copy_from_slice(&9_999_999u64.to_le_bytes());
     let err = read_bytes(&dir, "noderef.msh", &b).unwrap_err();
-    assert!(matches!(err, MeshError::BadNodeRef { tag: 9_999_999, .. }), "{err:?}");
+    assert!(
+        matches!(err, MeshError::BadNodeRef { tag: 9_999_999, .. }),
+        "{err:?}"
+    );
     assert!(err.to_string().contains("noderef.msh"));
     // Not a mesh at all.
     let err = read_bytes(&dir, "text.msh", b"hello\n").unwrap_err();
@@ -121,7 +143,10 @@ fn missing_physical_group_is_named() {
     let err = build_model(&read_msh(&msh).unwrap(), D, L_ADH).unwrap_err();
     assert!(matches!(err, MeshError::MissingGroup { .. }), "{err:?}");
     let msg = err.to_string();
-    assert!(msg.contains("concrete_free_face") && msg.contains("out.msh"), "{msg}");
+    assert!(
+        msg.contains("concrete_free_face") && msg.contains("out.msh"),
+        "{msg}"
+    );
 }
 
 /// A failed re-run leaves the previous artifacts byte-identical and no
@@ -131,12 +156,27 @@ fn failure_keeps_earlier_artifacts() {
     let dir = scratch("artifacts");
     let spec = small_spec(0.0016);
     let r = mesh_specimen(gmsh(), &data("smooth.geo"), &spec, D, L_ADH, &dir).unwrap();
-    let names = [mesh::MSH_FILE, mesh::MODEL_FILE, mesh::VTU_FILE, mesh::REPORT_FILE];
-    let before: Vec<Vec<u8>> = names.iter().map(|n| std::fs::read(dir.join(n)).unwrap()).collect();
+    let names = [
+        mesh::MSH_FILE,
+        mesh::MODEL_FILE,
+        mesh::VTU_FILE,
+        mesh::REPORT_FILE,
+    ];
+    let before: Vec<Vec<u8>> = names
+        .iter()
+        .map(|n| std::fs::read(dir.join(n)).unwrap())
+        .collect();
     let json: serde_json::Value = serde_json::from_slice(&before[3]).unwrap();
     for key in [
-        "gmsh_version", "nodes", "tets_steel", "tets_concrete", "interface_elements_adhesive",
-        "interface_elements_free", "duplicated_nodes", "min_quality", "mean_quality",
+        "gmsh_version",
+        "nodes",
+        "tets_steel",
+        "tets_concrete",
+        "interface_elements_adhesive",
+        "interface_elements_free",
+        "duplicated_nodes",
+        "min_quality",
+        "mean_quality",
         "interface_area_adhesive_m2",
     ] {
         assert!(json.get(key).is_some(), "mesh.json lacks {key}");
@@ -153,12 +193,18 @@ fn failure_keeps_earlier_artifacts() {
     std::fs::write(&broken, "Box(1) = {0, 0;\n").unwrap();
     assert!(mesh_specimen(gmsh(), &broken, &spec, D, L_ADH, &dir).is_err());
     let missing_group = dir.join("nogroup.geo");
-    let geo = std::fs::read_to_string(data("smooth.geo")).unwrap().replace("Physical Volume(\"steel\") = steel();", "");
+    let geo = std::fs::read_to_string(data("smooth.geo"))
+        .unwrap()
+        .replace("Physical Volume(\"steel\") = steel();", "");
     std::fs::write(&missing_group, geo).unwrap();
     let err = mesh_specimen(gmsh(), &missing_group, &spec, D, L_ADH, &dir).unwrap_err();
     assert!(err.to_string().contains("\"steel\""), "{err}");
     for (n, b) in names.iter().zip(&before) {
-        assert_eq!(&std::fs::read(dir.join(n)).unwrap(), b, "{n} changed by a failed run");
+        assert_eq!(
+            &std::fs::read(dir.join(n)).unwrap(),
+            b,
+            "{n} changed by a failed run"
+        );
     }
     let leftovers: Vec<_> = std::fs::read_dir(&dir)
         .unwrap()
@@ -180,7 +226,10 @@ fn corrupt_model_file_is_an_error() {
     let bytes = std::fs::read(&p).unwrap();
     std::fs::write(&p, &bytes[..bytes.len() / 2]).unwrap();
     let err = Model::load(&p).unwrap_err();
-    assert!(matches!(err, MeshError::ModelFile { .. }) && err.to_string().contains("model.bin"), "{err}");
+    assert!(
+        matches!(err, MeshError::ModelFile { .. }) && err.to_string().contains("model.bin"),
+        "{err}"
+    );
     std::fs::write(&p, b"something else").unwrap();
     assert!(Model::load(&p).is_err());
 }

@@ -12,5 +12,8 @@ fn gmsh_missing_is_reported() {
     std::env::remove_var("GMSH");
     assert!(matches!(err, MeshError::Gmsh(_)), "{err:?}");
     let msg = err.to_string();
-    assert!(msg.contains("/nonexistent/gmsh") && msg.contains("GMSH"), "{msg}");
+    assert!(
+        msg.contains("/nonexistent/gmsh") && msg.contains("GMSH"),
+        "{msg}"
+    );
 }

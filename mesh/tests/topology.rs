@@ -48,14 +48,21 @@ fn smooth_bar_topology() {
     assert_eq!(a, at_ladh(InterfaceZone::Free));
     // Adhesive elements lie in z ∈ [0, l_adh], free ones in [l_adh, L].
     for e in &m.interfaces {
-        let z: Vec<f64> = e.nodes[..3].iter().map(|&i| m.nodes[i as usize][2]).collect();
+        let z: Vec<f64> = e.nodes[..3]
+            .iter()
+            .map(|&i| m.nodes[i as usize][2])
+            .collect();
         let (lo, hi) = match e.zone {
             InterfaceZone::Adhesive => (0.0, L_ADH),
             InterfaceZone::Free => (L_ADH, L),
         };
         assert!(z.iter().all(|&z| z >= lo - 1e-9 && z <= hi + 1e-9));
         // On a cylinder n is nearly radial (a flat facet tilts by O(h/d)) and t nearly axial.
-        assert!(e.frame.t[2] > 0.99 && e.frame.n[2].abs() < 0.1, "{:?}", e.frame);
+        assert!(
+            e.frame.t[2] > 0.99 && e.frame.n[2].abs() < 0.1,
+            "{:?}",
+            e.frame
+        );
     }
     // Bar end sets sit on their planes.
     for &i in &m.node_sets.bar_loaded_end {
@@ -73,7 +80,11 @@ fn smooth_interface_area_matches_analytic() {
     let (m, r) = build("smooth.geo", 0.0004, "smooth_area");
     let exact = PI * D * L_ADH;
     let rel = (r.interface_area_adhesive_m2 - exact).abs() / exact;
-    assert!(rel < 0.01, "adhesive area {} vs {exact}: {rel}", r.interface_area_adhesive_m2);
+    assert!(
+        rel < 0.01,
+        "adhesive area {} vs {exact}: {rel}",
+        r.interface_area_adhesive_m2
+    );
     let free = zone_area(&m, InterfaceZone::Free);
     let exact_free = PI * D * (L - L_ADH);
     assert!((free - exact_free).abs() / exact_free < 0.01);
@@ -82,7 +93,10 @@ fn smooth_interface_area_matches_analytic() {
     assert!((r.volume_steel_m3 - v_bar).abs() / v_bar < 0.01);
     let v_con = L * L * L - PI * D * D / 4.0 * L;
     assert!((r.volume_concrete_m3 - v_con).abs() / v_con < 0.01);
-    assert!(r.min_quality > 0.05 && r.mean_quality > 0.5 && r.mean_quality <= 1.0, "{r:?}");
+    assert!(
+        r.min_quality > 0.05 && r.mean_quality > 0.5 && r.mean_quality <= 1.0,
+        "{r:?}"
+    );
 }
 
 /// Ring ribs (flanks normal to the axis, rib corners on the interface): the
@@ -96,14 +110,28 @@ fn ring_rib_topology_and_area() {
     let flanks = 2.0 * PI * (rr * rr - rc * rc);
     let exact = 2.0 * PI * rc * (L_ADH - RIB_B) + 2.0 * PI * rr * RIB_B + flanks;
     let rel = (r.interface_area_adhesive_m2 - exact).abs() / exact;
-    assert!(rel < 0.01, "adhesive area {} vs {exact}: {rel}", r.interface_area_adhesive_m2);
+    assert!(
+        rel < 0.01,
+        "adhesive area {} vs {exact}: {rel}",
+        r.interface_area_adhesive_m2
+    );
     // Flank elements (n ∥ z) get a radial t.
-    let flank: Vec<_> = m.interfaces.iter().filter(|e| e.frame.n[2].abs() > 0.999).collect();
+    let flank: Vec<_> = m
+        .interfaces
+        .iter()
+        .filter(|e| e.frame.n[2].abs() > 0.999)
+        .collect();
     assert!(!flank.is_empty());
     for e in flank {
         let c = m.nodes[e.nodes[0] as usize];
         let radial = (e.frame.t[0] * c[0] + e.frame.t[1] * c[1]) / c[0].hypot(c[1]);
         assert!(radial > 0.9, "flank t not radial: {:?}", e.frame);
     }
-    assert!(m.node_region.iter().filter(|r| **r == Region::Concrete).count() > r.duplicated_nodes);
+    assert!(
+        m.node_region
+            .iter()
+            .filter(|r| **r == Region::Concrete)
+            .count()
+            > r.duplicated_nodes
+    );
 }
