@@ -112,3 +112,63 @@ pub fn model_vtu(model: &Model) -> Vec<u8> {
     bytes.extend_from_slice(b"\n</AppendedData>\n</VTKFile>\n");
     bytes
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The appended block holds every array at its declared offset with a
+    /// UInt64 byte count matching the array's type and length (VTK XML format).
+    #[test]
+    fn appended_offsets_and_sizes_match() {
+        let model = Model {
+            nodes: vec![
+                [0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [0.0, 1.0, 0.0],
+                [0.0, 0.0, 1.0],
+                [0.0, 0.0, -1.0],
+            ],
+            node_region: vec![Region::Steel; 5],
+            tets: vec![[0, 1, 2, 3], [0, 2, 1, 4]],
+            tet_region: vec![Region::Steel, Region::Concrete],
+            tet_size: vec![1.0, 1.0],
+            ..Model::default()
+        };
+        let bytes = model_vtu(&model);
+        let start = bytes.windows(2).position(|w| w == b"\n_").unwrap() + 2;
+        let header = std::str::from_utf8(&bytes[..start]).unwrap();
+        assert!(header.contains("NumberOfPoints=\"5\" NumberOfCells=\"2\""));
+        // (name, element width, count) in declaration order.
+        let expect = [
+            ("Float64\" NumberOfComponents=\"3\"", 8, 15),
+            ("Name=\"connectivity\"", 8, 8),
+            ("Name=\"offsets\"", 8, 2),
+            ("Name=\"types\"", 1, 2),
+            ("Name=\"region\"", 4, 2),
+            ("Name=\"quality\"", 8, 2),
+            ("Name=\"size\"", 8, 2),
+        ];
+        let mut pos = start;
+        for (name, width, count) in expect {
+            let line = header.lines().find(|l| l.contains(name)).unwrap();
+            let off: usize = line
+                .split("offset=\"")
+                .nth(1)
+                .unwrap()
+                .split('"')
+                .next()
+                .unwrap()
+                .parse()
+                .unwrap();
+            assert_eq!(start + off, pos, "{name}");
+            let n = u64::from_le_bytes(bytes[pos..pos + 8].try_into().unwrap()) as usize;
+            assert_eq!(n, width * count, "{name}");
+            pos += 8 + n;
+        }
+        assert_eq!(&bytes[pos..], b"\n</AppendedData>\n</VTKFile>\n");
+        // The region array says steel then concrete; offsets end at 8.
+        let region_at = bytes.len() - 28 - (8 + 16) - (8 + 16) - 8;
+        assert_eq!(&bytes[region_at..region_at + 8], &[1, 0, 0, 0, 2, 0, 0, 0]);
+    }
+}
