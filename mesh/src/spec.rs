@@ -55,7 +55,7 @@ pub enum Optimize {
     None,
     /// gmsh's tet optimiser (`Mesh.Optimize = 1`).
     Gmsh,
-    /// gmsh's then Netgen's optimiser (`Mesh.OptimizeNetgen = 1`; not in gmsh 4.8).
+    /// gmsh's then Netgen's optimiser (`Mesh.OptimizeNetgen = 1`; absent from Debian's gmsh 4.8.4).
     Netgen,
 }
 
