@@ -1,6 +1,7 @@
-//! Running gmsh as a subprocess: locating it, checking its version, meshing
-//! a `.geo` into a binary `.msh` 4.1 with the options of a [`MeshSpec`],
-//! under a wall-clock limit, with gmsh's own messages kept for errors.
+//! Meshing a `.geo` into a binary `.msh` 4.1 with the options of a
+//! [`MeshSpec`], under a wall-clock limit, with gmsh's own messages kept for
+//! errors. Locating gmsh and checking its version is `geom::gmsh::Gmsh`'s
+//! job (re-exported here).
 
 use crate::spec::{MeshSpec, Optimize};
 use crate::MeshError;
