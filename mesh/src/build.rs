@@ -389,6 +389,7 @@ pub fn build_model(
         bar_free_end: set("bar_free_end", Region::Steel)?,
         concrete_bearing_face: set("concrete_bearing_face", Region::Concrete)?,
         concrete_free_face: set("concrete_free_face", Region::Concrete)?,
+        ..Default::default()
     };
 
     let n_tets = tets.len() as f64;
@@ -435,6 +436,7 @@ pub fn build_model(
         node_sets,
         bar_diameter,
         adhesive_length,
+        symmetry: Default::default(),
     };
     Ok((model, report))
 }

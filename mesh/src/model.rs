@@ -54,6 +54,34 @@ pub struct NodeSets {
     pub concrete_bearing_face: Vec<u32>,
     /// Concrete nodes on the free face z = 0 (the ring around the bar): FED.
     pub concrete_free_face: Vec<u32>,
+    /// Nodes (both sides) on the symmetry plane x = 0 of a reduced model: u_x = 0.
+    #[serde(default)]
+    pub symmetry_x: Vec<u32>,
+    /// Nodes (both sides) on the symmetry plane y = 0 of a reduced model: u_y = 0.
+    #[serde(default)]
+    pub symmetry_y: Vec<u32>,
+}
+
+/// Which part of the specimen the model holds. A smooth bar in the cube has
+/// the mirror planes x = 0 and y = 0; the quarter x ≥ 0, y ≥ 0 with those
+/// planes held normal gives the whole specimen's response at a quarter of
+/// the cost. Forces measured on the model are multiplied by
+/// [`Symmetry::force_factor`].
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Symmetry {
+    #[default]
+    Full,
+    Quarter,
+}
+
+impl Symmetry {
+    /// Whole-specimen force per force measured on the model.
+    pub fn force_factor(self) -> f64 {
+        match self {
+            Symmetry::Full => 1.0,
+            Symmetry::Quarter => 4.0,
+        }
+    }
 }
 
 /// The meshed specimen ready for the solver.
@@ -74,11 +102,14 @@ pub struct Model {
     pub bar_diameter: f64,
     /// Adhesive (bonded) length l_adh, m.
     pub adhesive_length: f64,
+    /// Full specimen or a symmetric part of it.
+    #[serde(default)]
+    pub symmetry: Symmetry,
 }
 
 /// First bytes of a model file: names the format and its version, so a
 /// stale or foreign file is rejected instead of misread.
-const MODEL_MAGIC: &[u8; 16] = b"ribbar-model-v1\n";
+const MODEL_MAGIC: &[u8; 16] = b"ribbar-model-v2\n";
 
 impl Model {
     /// Writes the model (bincode after a magic header) atomically: a

@@ -13,7 +13,7 @@ use std::time::Instant;
 /// Versions of what each stage produces; bumped when a stage's output for
 /// the same inputs changes, so old artifacts are not reused.
 const GEOMETRY_FORMAT: u32 = 1;
-const MESH_FORMAT: u32 = 1;
+const MESH_FORMAT: u32 = 2;
 const SOLVE_FORMAT: u32 = 1;
 const POST_FORMAT: u32 = 1;
 
