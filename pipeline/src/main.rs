@@ -70,7 +70,14 @@ fn status(args: &SceneArgs) -> Result<ExitCode> {
             StageStatus::Missing => "missing".to_string(),
             StageStatus::Interrupted => "interrupted: `ribbar run` resumes it".to_string(),
             StageStatus::Stale(changed) if changed.is_empty() => "stale (upstream changed)".to_string(),
-            StageStatus::Stale(changed) => format!("stale: changed {}", changed.join(", ")),
+            StageStatus::Stale(changed) => format!(
+                "stale: changed {}",
+                changed
+                    .iter()
+                    .map(|k| if STAGES.contains(&k.as_str()) { format!("{k} (upstream stage)") } else { k.clone() })
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
         };
         all_done &= st == StageStatus::UpToDate;
         println!("{:<9} {}", stage, text);

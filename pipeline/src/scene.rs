@@ -41,6 +41,10 @@ pub struct Scene {
     pub loading: Loading,
     pub solver: SolverSettings,
     pub outputs: Outputs,
+    /// The spec tree as written, overrides applied: names the keys a user
+    /// changed when a stage is stale. Not hashed (only resolved values are).
+    #[serde(skip)]
+    pub written: serde_json::Value,
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -99,8 +103,13 @@ impl Scene {
                 .and_then(|o| o.apply(&mut tree))
                 .map_err(|source| SceneError::Override { path: path.to_path_buf(), source })?;
         }
+        let written = serde_json::to_value(&tree).unwrap_or(serde_json::Value::Null);
         let raw: RawScene = serde_yaml::from_value(tree).map_err(yaml_err)?;
-        raw.resolve().map_err(|message| SceneError::Invalid { path: path.to_path_buf(), message })
+        let mut scene = raw
+            .resolve()
+            .map_err(|message| SceneError::Invalid { path: path.to_path_buf(), message })?;
+        scene.written = written;
+        Ok(scene)
     }
 }
 
@@ -117,6 +126,7 @@ impl RawScene {
             loading: self.loading.resolve().map_err(|e| e.to_string())?,
             solver: self.solver.resolve().map_err(|e| e.to_string())?,
             outputs: self.outputs.resolve().map_err(|e| e.to_string())?,
+            written: serde_json::Value::Null,
         })
     }
 }

@@ -82,7 +82,19 @@ impl Keys {
                 "outputs": to_json(&scene.outputs.post),
             }),
         );
-        Keys { geometry, mesh, solve, post }
+        let w = |pointer: &str| scene.written.pointer(pointer).cloned().unwrap_or(serde_json::Value::Null);
+        Keys {
+            geometry: geometry.with_written(json!({"bar": w("/bar"), "specimen": w("/specimen")})),
+            mesh: mesh.with_written(json!({"mesh": w("/mesh")})),
+            solve: solve.with_written(json!({
+                "specimen": {"non_adhesive": w("/specimen/non_adhesive")},
+                "materials": w("/materials"),
+                "loading": w("/loading"),
+                "solver": w("/solver"),
+                "outputs": {"fields": w("/outputs/fields")},
+            })),
+            post: post.with_written(json!({"outputs": w("/outputs")})),
+        }
     }
 
     pub fn get(&self, stage: &str) -> &StageKey {
@@ -128,13 +140,30 @@ pub fn status(store: &Store, scene: &Scene, keys: &Keys) -> Result<Vec<(&'static
             } else if store.partial_dir(key).join(CHECKPOINT_FILE).is_file() {
                 StageStatus::Interrupted
             } else if let Some(old) = record.get(stage) {
-                StageStatus::Stale(changed_keys(&old.inputs, &key.inputs))
+                StageStatus::Stale(stale_reasons(old, key))
             } else {
                 StageStatus::Missing
             };
             (stage, st)
         })
         .collect())
+}
+
+/// What made a stage stale, in the user's words where possible: the spec
+/// keys as written, then upstream stages, then (when the written spec did
+/// not change, e.g. a program version) the resolved inputs.
+fn stale_reasons(old: &StageKey, new: &StageKey) -> Vec<String> {
+    let mut reasons = if old.written.is_null() {
+        Vec::new()
+    } else {
+        changed_keys(&old.written, &new.written)
+    };
+    let resolved = changed_keys(&old.inputs, &new.inputs);
+    reasons.extend(resolved.iter().filter(|k| STAGES.contains(&k.as_str())).cloned());
+    if reasons.is_empty() {
+        reasons = resolved;
+    }
+    reasons
 }
 
 pub const CHECKPOINT_FILE: &str = "checkpoint.bin";

@@ -50,6 +50,10 @@ pub struct StageKey {
     pub key: String,
     /// The exact document that was hashed.
     pub inputs: Value,
+    /// The spec keys as written that this stage reads (not hashed): lets
+    /// `status` name what the user changed.
+    #[serde(default)]
+    pub written: Value,
 }
 
 impl StageKey {
@@ -60,7 +64,12 @@ impl StageKey {
         let bytes = serde_json::to_vec(&document).expect("JSON values always serialise");
         let digest = Sha256::digest(&bytes);
         let key = digest.iter().take(16).map(|b| format!("{b:02x}")).collect();
-        StageKey { stage: stage.to_string(), key, inputs }
+        StageKey { stage: stage.to_string(), key, inputs, written: Value::Null }
+    }
+
+    pub fn with_written(mut self, written: Value) -> Self {
+        self.written = written;
+        self
     }
 }
 
@@ -241,12 +250,33 @@ fn link_or_copy_atomic(src: &Path, dst: &Path) -> Result<(), StoreError> {
     if let Some(parent) = dst.parent() {
         fs::create_dir_all(parent).map_err(io_err(parent))?;
     }
+    if same_file(src, dst) {
+        return Ok(());
+    }
     let tmp = tmp_name(dst);
     let _ = fs::remove_file(&tmp);
     if fs::hard_link(src, &tmp).is_err() {
         fs::copy(src, &tmp).map_err(io_err(&tmp))?;
     }
-    fs::rename(&tmp, dst).map_err(io_err(dst))
+    let renamed = fs::rename(&tmp, dst).map_err(io_err(dst));
+    // rename() between two links of one file succeeds without removing the
+    // source name (POSIX), which a concurrent publish can make happen.
+    let _ = fs::remove_file(&tmp);
+    renamed
+}
+
+#[cfg(unix)]
+fn same_file(a: &Path, b: &Path) -> bool {
+    use std::os::unix::fs::MetadataExt;
+    match (fs::metadata(a), fs::metadata(b)) {
+        (Ok(x), Ok(y)) => x.dev() == y.dev() && x.ino() == y.ino(),
+        _ => false,
+    }
+}
+
+#[cfg(not(unix))]
+fn same_file(_: &Path, _: &Path) -> bool {
+    false
 }
 
 fn tmp_name(path: &Path) -> PathBuf {
