@@ -16,9 +16,11 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-/// Checkpoints are written at most this often: a large model's state is
-/// hundreds of MB, and a resumed run repeats at most this much work.
-const CHECKPOINT_INTERVAL: Duration = Duration::from_secs(20);
+/// A checkpoint is written after a converged step once the time since the
+/// last one is this many times what writing the last one took: writing
+/// then costs at most ~5 % of the run whatever the model's size, and a
+/// resumed run repeats little work (every step on small models).
+const CHECKPOINT_COST_RATIO: u32 = 20;
 
 pub fn element_laws(model: &Model, scene: &crate::scene::Scene) -> Result<ElementLaws> {
     let materials = &scene.materials;
@@ -106,8 +108,11 @@ struct StageObserver<'a> {
     laws: &'a ElementLaws,
     checkpoint_path: PathBuf,
     fields_dir: PathBuf,
-    profile: Vec<u8>,
+    /// `interface_profile.csv` in the in-progress directory, appended at
+    /// each field step so that a resumed run keeps the earlier profiles.
+    profile_path: PathBuf,
     last_checkpoint: Instant,
+    checkpoint_cost: Duration,
     peak: f64,
     error: Option<anyhow::Error>,
     cutbacks: Vec<String>,
@@ -119,9 +124,12 @@ impl StageObserver<'_> {
         let model = view.model;
         solve::fields::write_bulk_vtu(&self.fields_dir.join(format!("{name}_bulk.vtu")), model, self.laws, view.u, view.states)?;
         solve::fields::write_interface_vtu(&self.fields_dir.join(format!("{name}_interface.vtu")), model, self.laws, view.u, view.states)?;
+        let mut lines = Vec::new();
         for (z, tn, tt) in interface_profile(model, self.laws, view) {
-            let _ = writeln!(self.profile, "{},{:e},{:e},{:e},{:e}", report.row.step, report.row.fed, z, tn, tt);
+            writeln!(lines, "{},{:e},{:e},{:e},{:e}", report.row.step, report.row.fed, z, tn, tt)?;
         }
+        let mut file = std::fs::OpenOptions::new().append(true).open(&self.profile_path)?;
+        file.write_all(&lines)?;
         Ok(())
     }
 }
@@ -149,8 +157,10 @@ impl Observer for StageObserver<'_> {
             self.peak = r.bond_stress;
             result = self.write_fields("peak", report, view);
         }
-        if result.is_ok() && self.last_checkpoint.elapsed() >= CHECKPOINT_INTERVAL {
+        if result.is_ok() && self.last_checkpoint.elapsed() >= self.checkpoint_cost * CHECKPOINT_COST_RATIO {
+            let started = Instant::now();
             result = (view.checkpoint)().save(&self.checkpoint_path).map_err(Into::into);
+            self.checkpoint_cost = started.elapsed();
             self.last_checkpoint = Instant::now();
         }
         if let Err(e) = result {
@@ -190,14 +200,35 @@ pub fn run(ctx: &Ctx, mesh_dir: &Path, out: &Path) -> Result<()> {
     } else {
         None
     };
+    // Profiles of steps after the checkpoint are recomputed: drop them.
+    let resumed_steps = checkpoint.as_ref().map_or(0, |cp| cp.rows.len());
+    let peak_so_far = checkpoint
+        .as_ref()
+        .and_then(|cp| cp.rows.iter().map(|r| r.bond_stress).reduce(f64::max))
+        .unwrap_or(f64::NEG_INFINITY);
+    let profile_path = out.join("interface_profile.csv");
+    let mut profile = b"step,fed,z,normal,shear\n".to_vec();
+    if resumed_steps > 0 {
+        if let Ok(old) = std::fs::read_to_string(&profile_path) {
+            for line in old.lines().skip(1) {
+                let step: Option<usize> = line.split(',').next().and_then(|s| s.parse().ok());
+                if step.is_some_and(|s| s <= resumed_steps) {
+                    profile.extend_from_slice(line.as_bytes());
+                    profile.push(b'\n');
+                }
+            }
+        }
+    }
+    crate::store::write_atomic(&profile_path, &profile)?;
     let mut observer = StageObserver {
         ctx,
         laws: &laws,
         checkpoint_path: checkpoint_path.clone(),
         fields_dir: out.join("fields"),
-        profile: b"step,fed,z,normal,shear\n".to_vec(),
+        profile_path: out.join("interface_profile.csv"),
         last_checkpoint: Instant::now(),
-        peak: f64::NEG_INFINITY,
+        checkpoint_cost: Duration::ZERO,
+        peak: peak_so_far,
         error: None,
         cutbacks: Vec::new(),
     };
@@ -234,7 +265,6 @@ pub fn run(ctx: &Ctx, mesh_dir: &Path, out: &Path) -> Result<()> {
         }
     }
     crate::store::write_atomic(&out.join("curve.csv"), &curve_csv(&result.rows))?;
-    crate::store::write_atomic(&out.join("interface_profile.csv"), &observer.profile)?;
     let solve_json = serde_json::json!({
         "summary": result.summary,
         "completed": stopped.is_none(),

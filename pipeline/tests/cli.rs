@@ -1,0 +1,264 @@
+//! End-to-end tests of the `ribbar` binary with real gmsh and real files:
+//! every stage, the store's make-style behaviour, bad input, interruption.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+const TINY: &str = "tests/data/tiny-smooth.yaml";
+
+fn repo() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).parent().unwrap().to_path_buf()
+}
+
+fn work_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("ribbar-cli-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    dir
+}
+
+fn ribbar(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_ribbar"))
+        .args(args)
+        .current_dir(repo())
+        .stdin(Stdio::null())
+        .output()
+        .expect("ribbar runs")
+}
+
+fn text(o: &Output) -> String {
+    format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr))
+}
+
+fn ok(args: &[&str]) -> String {
+    let o = ribbar(args);
+    assert!(o.status.success(), "ribbar {args:?} failed:\n{}", text(&o));
+    text(&o)
+}
+
+fn read(path: &Path) -> String {
+    std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+fn stage_line<'a>(out: &'a str, stage: &str) -> &'a str {
+    out.lines()
+        .find(|l| l.starts_with(&format!("{stage}: ")) && (l.contains("up to date") || l.contains("done in")))
+        .unwrap_or_else(|| panic!("no line for stage {stage} in:\n{out}"))
+}
+
+/// SPEC §1/§7: `run` produces every artifact of every stage under
+/// WORK/<name>/, readable by the tools users have (CSV, JSON, VTU, PNG/SVG).
+#[test]
+fn run_writes_every_artifact() {
+    let work = work_dir("artifacts");
+    let w = work.to_str().unwrap();
+    ok(&["run", TINY, "--work", w]);
+    let scene = work.join("tiny-smooth");
+    for f in [
+        "specimen.geo",
+        "geometry.json",
+        "specimen.msh",
+        "model.bin",
+        "mesh.vtu",
+        "mesh.json",
+        "curve.csv",
+        "solve.json",
+        "summary.json",
+        "plots/bond_slip.png",
+        "plots/bond_slip.svg",
+        "plots/interface_profile.png",
+        "fields/step0002_bulk.vtu",
+        "fields/peak_bulk.vtu",
+        "fields/end_interface.vtu",
+    ] {
+        assert!(scene.join(f).is_file(), "missing {f}");
+    }
+    let curve = read(&scene.join("curve.csv"));
+    assert!(curve.starts_with("step,u_imposed,force,fed,bond_stress,iterations\n"));
+    assert!(curve.lines().count() > 5, "{curve}");
+    let summary: serde_json::Value = serde_json::from_str(&read(&scene.join("summary.json"))).unwrap();
+    let peak = summary.pointer("/curve/peak_bond_stress").and_then(|v| v.as_f64()).unwrap();
+    assert!(peak > 1e5 && peak < 1e8, "peak bond stress {peak} Pa");
+    assert!(summary.pointer("/solver/summary/wall_time_s/factorisation").is_some());
+    let vtu = read(&scene.join("fields/peak_bulk.vtu"));
+    assert!(vtu.contains("<VTKFile") && vtu.contains("Name=\"D\"") && vtu.contains("principal_stress"));
+    let png = std::fs::read(scene.join("plots/bond_slip.png")).unwrap();
+    assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n");
+    // Nothing half-written is left beside the published files.
+    let leftovers: Vec<_> = std::fs::read_dir(&scene)
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .filter(|e| e.file_name().to_string_lossy().contains(".tmp"))
+        .collect();
+    assert!(leftovers.is_empty(), "{leftovers:?}");
+    std::fs::remove_dir_all(&work).unwrap();
+}
+
+/// Issue 6: a second run with nothing changed runs nothing; a materials
+/// change reruns solve and post only; a mesh size change reruns mesh,
+/// solve and post; `status` names the changed spec keys.
+#[test]
+fn stages_rerun_only_what_changed() {
+    let work = work_dir("make");
+    let w = work.to_str().unwrap();
+    ok(&["run", TINY, "--work", w]);
+    let again = ok(&["run", TINY, "--work", w]);
+    for stage in ["geometry", "mesh", "solve", "post"] {
+        assert!(stage_line(&again, stage).contains("up to date"), "{again}");
+    }
+    assert!(ok(&["status", TINY, "--work", w]).contains("every stage is up to date"));
+
+    let mu = "materials.interface.mu=0.001";
+    let status = ok(&["status", TINY, "--work", w, "--set", mu]);
+    assert!(status.contains("geometry  up to date") && status.contains("mesh      up to date"), "{status}");
+    let solve_line = status.lines().find(|l| l.starts_with("solve")).unwrap();
+    assert!(solve_line.contains("stale") && solve_line.contains("materials.interface.mu"), "{status}");
+    let out = ok(&["run", TINY, "--work", w, "--set", mu]);
+    assert!(stage_line(&out, "geometry").contains("up to date"), "{out}");
+    assert!(stage_line(&out, "mesh").contains("up to date"), "{out}");
+    assert!(stage_line(&out, "solve").contains("done in"), "{out}");
+    assert!(stage_line(&out, "post").contains("done in"), "{out}");
+
+    let h = "mesh.h_interface=2.5 mm";
+    let status = ok(&["status", TINY, "--work", w, "--set", h]);
+    assert!(status.lines().any(|l| l.starts_with("mesh") && l.contains("mesh.h_interface")), "{status}");
+    let out = ok(&["run", TINY, "--work", w, "--set", h]);
+    assert!(stage_line(&out, "geometry").contains("up to date"), "{out}");
+    for stage in ["mesh", "solve", "post"] {
+        assert!(stage_line(&out, stage).contains("done in"), "{out}");
+    }
+    // Changing only how post reports reruns post alone.
+    let out = ok(&["run", TINY, "--work", w, "--set", "outputs.energy_fed_limit=0.1 mm"]);
+    assert!(stage_line(&out, "solve").contains("up to date"), "{out}");
+    assert!(stage_line(&out, "post").contains("done in"), "{out}");
+    std::fs::remove_dir_all(&work).unwrap();
+}
+
+/// SPEC §8: bad input names the file and key, exits non-zero, never panics
+/// and leaves earlier artifacts intact.
+#[test]
+fn bad_input_is_reported_and_keeps_artifacts() {
+    let work = work_dir("bad");
+    let w = work.to_str().unwrap();
+    ok(&["geometry", TINY, "--work", w]);
+    let geo = work.join("tiny-smooth/specimen.geo");
+    let before = read(&geo);
+    let cases: &[(&[&str], &str)] = &[
+        (&["--set", "bar.diameterr=8 mm"], "diameterr"),
+        (&["--set", "bar.diameter=8 MPa"], "bar.diameter"),
+        (&["--set", "specimen.adhesive_length=30 mm"], "specimen.adhesive_length"),
+        (&["--set", "materials.interface.mu=-1"], "materials.interface.mu"),
+        (&["--set", "mesh.h_outer=0.1 mm"], "mesh.h_outer"),
+        (&["--set", "loading.cutback=2"], "loading.cutback"),
+        (&["--set", "bar.diameter"], "KEY=VALUE"),
+    ];
+    for (extra, needle) in cases {
+        let mut args = vec!["run", TINY, "--work", w];
+        args.extend_from_slice(extra);
+        let o = ribbar(&args);
+        let t = text(&o);
+        assert_eq!(o.status.code(), Some(1), "{extra:?}: {t}");
+        assert!(t.contains(needle), "{extra:?} should name {needle}: {t}");
+        assert!(!t.contains("panicked"), "{t}");
+    }
+    let o = ribbar(&["run", "specs/no-such-scene.yaml", "--work", w]);
+    assert!(!o.status.success() && text(&o).contains("no-such-scene.yaml"), "{}", text(&o));
+    let broken = work.join("broken.yaml");
+    std::fs::write(&broken, "name: x\nbar: {kind: smooth, diameter: [\n").unwrap();
+    let o = ribbar(&["run", broken.to_str().unwrap(), "--work", w]);
+    assert!(!o.status.success() && text(&o).contains("broken.yaml"), "{}", text(&o));
+    // gmsh missing: a clear message, and the published geometry untouched.
+    let o = Command::new(env!("CARGO_BIN_EXE_ribbar"))
+        .args(["run", TINY, "--work", w, "--set", "bar.diameter=6 mm"])
+        .current_dir(repo())
+        .env("GMSH", "/nonexistent/gmsh")
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    assert!(text(&o).contains("/nonexistent/gmsh") && text(&o).contains("setup"), "{}", text(&o));
+    assert_eq!(read(&geo), before);
+    std::fs::remove_dir_all(&work).unwrap();
+}
+
+/// Issue 4: `ribbar material` drives a shipped material-point file and
+/// writes the documented CSV columns.
+#[test]
+fn material_driver_writes_csv() {
+    let work = work_dir("material");
+    std::fs::create_dir_all(&work).unwrap();
+    let dir = repo().join("specs/material");
+    let mut files: Vec<_> = std::fs::read_dir(&dir).unwrap().filter_map(|e| e.ok()).map(|e| e.path()).collect();
+    files.sort();
+    let fczm = files
+        .iter()
+        .find(|p| read(p).contains("law: fczm"))
+        .expect("a shipped FCZM test file");
+    let out = work.join("point.csv");
+    ok(&["material", fczm.to_str().unwrap(), "-o", out.to_str().unwrap()]);
+    let csv = read(&out);
+    assert!(csv.starts_with("t,un,ut,uh,tn,tt,th,D"), "{}", &csv[..80.min(csv.len())]);
+    assert!(csv.lines().count() > 10);
+    let bad = work.join("bad.yaml");
+    std::fs::write(&bad, "law: fczm\nparameters: {ft: \"3 MPa\", mu: -1}\npath: [{t: 0}, {t: 1, un: 1e-5}]\n").unwrap();
+    let o = ribbar(&["material", bad.to_str().unwrap()]);
+    assert!(!o.status.success() && text(&o).contains("bad.yaml"), "{}", text(&o));
+    std::fs::remove_dir_all(&work).unwrap();
+}
+
+/// Issue 6: killing `ribbar run` (SIGKILL) at any moment leaves no artifact
+/// that looks complete, and the next run finishes with the same curve as an
+/// uninterrupted run (a killed solve resumes from its checkpoint).
+#[test]
+fn killed_runs_resume_to_the_same_curve() {
+    let slow = ["--set", "loading.max_step=4 um", "--set", "loading.initial_step=2 um"];
+    let reference = work_dir("kill-ref");
+    let r = reference.to_str().unwrap();
+    let mut args = vec!["run", TINY, "--work", r];
+    args.extend_from_slice(&slow);
+    let started = Instant::now();
+    ok(&args);
+    let full = started.elapsed();
+    let expected = read(&reference.join("tiny-smooth/curve.csv"));
+
+    let work = work_dir("kill");
+    let w = work.to_str().unwrap();
+    let mut resumed = false;
+    // Kill times spread over the whole pipeline: geometry, mesh, solve, post.
+    for fraction in [0.03, 0.1, 0.2, 0.3, 0.45, 0.6, 0.75, 0.9, 0.97] {
+        let delay = full.mul_f64(fraction);
+        let mut args = vec!["run", TINY, "--work", w, "-v"];
+        args.extend_from_slice(&slow);
+        let mut child = Command::new(env!("CARGO_BIN_EXE_ribbar"))
+            .args(&args)
+            .current_dir(repo())
+            .stdin(Stdio::null())
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .unwrap();
+        let start = Instant::now();
+        while start.elapsed() < delay {
+            if child.try_wait().unwrap().is_some() {
+                break;
+            }
+            std::thread::sleep(Duration::from_millis(10));
+        }
+        let _ = child.kill(); // SIGKILL on Unix
+        let _ = child.wait();
+        // Whatever is published parses.
+        let scene = work.join("tiny-smooth");
+        for json in ["geometry.json", "mesh.json", "solve.json", "summary.json"] {
+            if let Ok(t) = std::fs::read_to_string(scene.join(json)) {
+                serde_json::from_str::<serde_json::Value>(&t).unwrap_or_else(|e| panic!("{json}: {e}"));
+            }
+        }
+        let out = ok(&args);
+        resumed |= out.contains("resuming after step");
+        assert_eq!(read(&scene.join("curve.csv")), expected, "after a kill at {delay:?}");
+        ok(&["clean", "--all", "--work", w]);
+        std::fs::remove_dir_all(&scene).unwrap();
+    }
+    assert!(resumed, "no kill landed in the middle of a solve");
+    std::fs::remove_dir_all(&work).unwrap();
+    std::fs::remove_dir_all(&reference).unwrap();
+}
