@@ -5,7 +5,7 @@ use crate::geo::{groups, write_geo};
 use crate::gmsh::{Gmsh, GmshError};
 use crate::layout::Layout;
 use crate::metrics::{analytic, tessellated, Metrics};
-use crate::spec::{Bar, Specimen};
+use crate::spec::{Bar, Specimen, Symmetry};
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -43,9 +43,15 @@ impl Check {
     }
 }
 
-/// Everything `geometry.json` holds.
+/// Everything `geometry.json` holds. The metrics describe the whole
+/// specimen even when only a part of it is modelled, so reports of full and
+/// quarter runs compare.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct GeometryReport {
+    /// The modelled part: `"full"` or `"quarter"` (x ≥ 0, y ≥ 0).
+    pub symmetry: Symmetry,
+    /// Modelled volume per whole-specimen volume (1 or 0.25).
+    pub modelled_fraction: f64,
     #[serde(rename = "f_R")]
     pub f_r: f64,
     pub rib_volume_m3: f64,
@@ -53,7 +59,9 @@ pub struct GeometryReport {
     pub interface_area_adhesive_m2: f64,
     pub interface_area_free_m2: f64,
     pub rib_count: usize,
-    /// rib_volume_m3 (ribbed bars only), bar_volume_m3, interface areas.
+    /// rib_volume_m3 (ribbed bars only), bar_volume_m3, interface areas;
+    /// `gmsh_occ` is the modelled part's measure divided by
+    /// `modelled_fraction` (whole-specimen equivalent).
     pub checks: BTreeMap<String, Check>,
     /// Smallest axial distance from the planes z = 0, l_adh, L to a rib edge feature, m.
     pub plane_clearance_m: Option<f64>,
@@ -228,9 +236,15 @@ pub fn build_geometry(
             message: measured.errors.join("\n"),
         });
     }
-    let group_mass = |name: &str| measured.groups.get(name).map_or(0.0, |g| g.mass);
+    // OCC measures the modelled part; the checks compare whole-specimen values.
+    let fraction = specimen.symmetry.fraction();
+    let group_mass = |name: &str| measured.groups.get(name).map_or(0.0, |g| g.mass) / fraction;
     let mut group_entities = BTreeMap::new();
-    for name in [
+    let mirror_groups: &[&str] = match specimen.symmetry {
+        Symmetry::Full => &[],
+        Symmetry::Quarter => &[groups::SYMMETRY_X, groups::SYMMETRY_Y],
+    };
+    for &name in [
         groups::STEEL,
         groups::CONCRETE,
         groups::INTERFACE_ADHESIVE,
@@ -239,7 +253,10 @@ pub fn build_geometry(
         groups::BAR_FREE_END,
         groups::CONCRETE_BEARING_FACE,
         groups::CONCRETE_FREE_FACE,
-    ] {
+    ]
+    .iter()
+    .chain(mirror_groups)
+    {
         let count = measured.groups.get(name).map_or(0, |g| g.count);
         let may_be_empty = name == groups::INTERFACE_FREE && layout.l_adh >= layout.l;
         if count == 0 && !may_be_empty {
@@ -300,6 +317,8 @@ pub fn build_geometry(
         }
     }
     let report = GeometryReport {
+        symmetry: specimen.symmetry,
+        modelled_fraction: fraction,
         f_r: m.f_r,
         rib_volume_m3: m.rib_volume_m3,
         bar_volume_m3: m.bar_volume_m3,

@@ -12,6 +12,7 @@
 //! mesh stage sets them with `-setnumber`; the script never meshes.
 
 use crate::layout::{Layout, RIB_SECTIONS};
+use crate::spec::Symmetry;
 use std::fmt::Write;
 
 /// Default interface mesh size in the script, m (overridden by the mesh stage).
@@ -29,6 +30,10 @@ pub mod groups {
     pub const BAR_FREE_END: &str = "bar_free_end";
     pub const CONCRETE_BEARING_FACE: &str = "concrete_bearing_face";
     pub const CONCRETE_FREE_FACE: &str = "concrete_free_face";
+    /// Faces (steel and concrete) on the mirror plane x = 0 of a quarter model.
+    pub const SYMMETRY_X: &str = "symmetry_x";
+    /// Faces (steel and concrete) on the mirror plane y = 0 of a quarter model.
+    pub const SYMMETRY_Y: &str = "symmetry_y";
 }
 
 fn num(v: f64) -> String {
@@ -48,6 +53,7 @@ pub fn write_geo(layout: &Layout) -> String {
     let l = layout.l;
     let r_out = layout.outer_radius();
     let has_cut = layout.l_adh < layout.l;
+    let quarter = layout.symmetry == Symmetry::Quarter;
     let _ = writeln!(
         w,
         "// Pull-out specimen: bar along z in a concrete cube (SPEC §2 frame), SI units (m).\n\
@@ -170,11 +176,32 @@ pub fn write_geo(layout: &Layout) -> String {
             );
         }
     }
+    if quarter {
+        let _ = writeln!(
+            w,
+            "\n// Quarter model: keep the part x >= 0, y >= 0 of the bar; the planes x = 0\n\
+             // and y = 0 are mirror planes of the specimen. The box overshoots the bar\n\
+             // ends so that no face of it coincides with a bar end.\n\
+             qb = newv; Box(qb) = {{0, 0, z_lo - R, r_out + R, r_out + R, z_hi - z_lo + 2 * R}};\n\
+             bar() = BooleanIntersection{{ Volume{{bar()}}; Delete; }}{{ Volume{{qb}}; Delete; }};"
+        );
+    }
+    // Lower corner and side of the modelled part of the cube's cross-section.
+    let (c0, cs) = if quarter {
+        ("0", "L / 2")
+    } else {
+        ("-L / 2", "L")
+    };
     let _ = writeln!(
         w,
-        "\n// Concrete cube; fragments with the bar{cut_note} give a conformal\n\
+        "\n// Concrete cube{part}; fragments with the bar{cut_note} give a conformal\n\
          // steel-concrete interface split at z = 0{cut_z}, L.\n\
-         cube = newv; Box(cube) = {{-L / 2, -L / 2, 0, L, L, L}};",
+         cube = newv; Box(cube) = {{{c0}, {c0}, 0, {cs}, {cs}, L}};",
+        part = if quarter {
+            " (its quarter x, y >= 0)"
+        } else {
+            ""
+        },
         cut_note = if has_cut {
             " and the plane z = l_adh"
         } else {
@@ -185,7 +212,7 @@ pub fn write_geo(layout: &Layout) -> String {
     if has_cut {
         let _ = writeln!(
             w,
-            "cut = news; Rectangle(cut) = {{-L / 2, -L / 2, l_adh, L, L}};\n\
+            "cut = news; Rectangle(cut) = {{{c0}, {c0}, l_adh, {cs}, {cs}}};\n\
              BooleanFragments{{ Volume{{bar(), cube}}; Delete; }}{{ Surface{{cut}}; Delete; }}"
         );
     } else {
@@ -203,7 +230,8 @@ pub fn write_geo(layout: &Layout) -> String {
          concrete() -= steel();\n\
          \n\
          // Interface: bar faces with z in [0, L] except the flat bar sections at\n\
-         // z = 0, l_adh, L; split by the centre of their box at l_adh.\n\
+         // z = 0, l_adh, L (and, in a quarter model, the bar's faces on the mirror\n\
+         // planes x = 0, y = 0); split by the centre of their box at l_adh.\n\
          cand() = Surface In BoundingBox{{-rb, -rb, -tol, rb, rb, L + tol}};\n\
          adh() = {{}}; fre() = {{}};\n\
          For i In {{0:#cand() - 1}}\n\
@@ -211,7 +239,8 @@ pub fn write_geo(layout: &Layout) -> String {
          \x20 zm = (bb(2) + bb(5)) / 2;\n\
          \x20 flat = (bb(5) - bb(2) < tol);\n\
          \x20 atcut = (Fabs(zm) < tol || Fabs(zm - l_adh) < tol || Fabs(zm - L) < tol);\n\
-         \x20 If (!(flat && atcut))\n\
+         \x20 mirror = (bb(3) - bb(0) < tol && Fabs(bb(0)) < tol) || (bb(4) - bb(1) < tol && Fabs(bb(1)) < tol);\n\
+         \x20 If (!(flat && atcut) && !mirror)\n\
          \x20   If (zm < l_adh)\n\
          \x20     adh() += cand(i);\n\
          \x20   Else\n\
@@ -251,6 +280,20 @@ pub fn write_geo(layout: &Layout) -> String {
         cb = groups::CONCRETE_BEARING_FACE,
         cf = groups::CONCRETE_FREE_FACE,
     );
+    if quarter {
+        let _ = writeln!(
+            w,
+            "\n// Mirror planes of the quarter model: every face (steel and concrete, inside\n\
+             // and outside the cube) lying in x = 0, resp. y = 0.\n\
+             span = L / 2 + z_hi - z_lo;\n\
+             sym_x() = Surface In BoundingBox{{-tol, -tol, z_lo - tol, tol, span, z_hi + tol}};\n\
+             sym_y() = Surface In BoundingBox{{-tol, -tol, z_lo - tol, span, tol, z_hi + tol}};\n\
+             Physical Surface(\"{sx}\") = {{sym_x()}};\n\
+             Physical Surface(\"{sy}\") = {{sym_y()}};",
+            sx = groups::SYMMETRY_X,
+            sy = groups::SYMMETRY_Y,
+        );
+    }
     let _ = writeln!(
         w,
         "\n// Size field (SPEC §9): h(r) = min(h_outer, h_interface + k max(0, r - r_out)),\n\

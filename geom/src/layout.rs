@@ -12,7 +12,7 @@
 //! longitudinal ribs: no face of a rib end is tangent to a longitudinal rib
 //! face, which keeps the OpenCASCADE union robust.
 
-use crate::spec::{Bar, SideB, Specimen};
+use crate::spec::{Bar, SideB, Specimen, Symmetry};
 use std::f64::consts::PI;
 
 /// Ribs of one side: mid-rib axial positions and the sign of the cos θ shift.
@@ -75,6 +75,9 @@ pub struct Layout {
     /// Adhesive length l_adh, m.
     pub l_adh: f64,
     pub ribs: Option<RibLayout>,
+    /// Modelled part: whole specimen or the quarter x ≥ 0, y ≥ 0. The
+    /// metrics always describe the whole specimen.
+    pub symmetry: Symmetry,
 }
 
 /// Sections in a ThruSections rib (SPEC §9: ~13 gave exact volumes).
@@ -140,6 +143,7 @@ impl Layout {
             l,
             l_adh,
             ribs,
+            symmetry: specimen.symmetry,
         }
     }
 

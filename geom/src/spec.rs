@@ -44,6 +44,40 @@ pub enum NonAdhesive {
     Contact,
 }
 
+/// `specimen.symmetry` as written: which part of the specimen is modelled.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum RawSymmetry {
+    /// The quarter for a smooth bar, the whole specimen for a ribbed one.
+    #[default]
+    Auto,
+    Full,
+    Quarter,
+}
+
+/// The modelled part of the specimen, resolved. The smooth bar in the cube
+/// has the mirror planes x = 0 and y = 0 (loading, supports and the FED/force
+/// measurements are symmetric in both), so the quarter x ≥ 0, y ≥ 0 with
+/// those planes held normal gives the whole specimen's response. Spiral ribs
+/// are not mirror-symmetric: a ribbed bar is always modelled whole.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum Symmetry {
+    #[default]
+    Full,
+    Quarter,
+}
+
+impl Symmetry {
+    /// Modelled volume (or area, or force) per whole-specimen one.
+    pub fn fraction(self) -> f64 {
+        match self {
+            Symmetry::Full => 1.0,
+            Symmetry::Quarter => 0.25,
+        }
+    }
+}
+
 /// `bar` as written in the spec.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -87,6 +121,7 @@ pub struct RawSpecimen {
     pub free_overhang: Option<RawQuantity>,
     pub loaded_overhang: Option<RawQuantity>,
     pub non_adhesive: Option<NonAdhesive>,
+    pub symmetry: Option<RawSymmetry>,
 }
 
 /// The resolved bar (SI units).
@@ -151,6 +186,8 @@ pub struct Specimen {
     /// Bar length e_load beyond the loaded face z = L, m.
     pub loaded_overhang: f64,
     pub non_adhesive: NonAdhesive,
+    /// The modelled part (whole specimen or the quarter x ≥ 0, y ≥ 0).
+    pub symmetry: Symmetry,
 }
 
 impl Bar {
@@ -341,6 +378,22 @@ pub fn resolve(bar: &RawBar, specimen: &RawSpecimen) -> Result<(Bar, Specimen), 
         ">= 0",
     )?;
 
+    let symmetry = match (specimen.symmetry.unwrap_or_default(), bar.kind) {
+        (RawSymmetry::Full, _) | (RawSymmetry::Auto, BarKind::Ribbed) => Symmetry::Full,
+        (RawSymmetry::Quarter, BarKind::Smooth) | (RawSymmetry::Auto, BarKind::Smooth) => {
+            Symmetry::Quarter
+        }
+        (RawSymmetry::Quarter, BarKind::Ribbed) => {
+            return Err(SpecError::Inconsistent {
+                key: "specimen.symmetry".into(),
+                problem: "quarter needs a smooth bar: spiral ribs have no mirror planes \
+                          through the axis, so a quarter model would not be the specimen; \
+                          use full or auto"
+                    .into(),
+            })
+        }
+    };
+
     Ok((
         bar,
         Specimen {
@@ -349,6 +402,7 @@ pub fn resolve(bar: &RawBar, specimen: &RawSpecimen) -> Result<(Bar, Specimen), 
             free_overhang: e_free,
             loaded_overhang: e_load,
             non_adhesive: specimen.non_adhesive.unwrap_or_default(),
+            symmetry,
         },
     ))
 }
@@ -637,6 +691,46 @@ mod tests {
         );
         assert!(serde_yaml::from_str::<RawRibs>("{hieght: 1 mm}").is_err());
         assert!(serde_yaml::from_str::<RawSpecimen>("{cube: 1}").is_err());
+    }
+
+    /// `specimen.symmetry: auto` models a quarter of a smooth bar's specimen and the whole of a ribbed one's; `full` is honoured for a smooth bar (issue 7: symmetry on by default for smooth bars).
+    #[test]
+    fn symmetry_auto_is_quarter_for_smooth_full_for_ribbed() {
+        let smooth = "{kind: smooth, diameter: 8 mm}";
+        let ribbed = "{kind: ribbed, diameter: 8 mm}";
+        assert_eq!(
+            try_resolve(smooth, "{}").unwrap().1.symmetry,
+            Symmetry::Quarter
+        );
+        assert_eq!(
+            try_resolve(ribbed, "{}").unwrap().1.symmetry,
+            Symmetry::Full
+        );
+        let full = try_resolve(smooth, "{symmetry: full}").unwrap().1;
+        assert_eq!(full.symmetry, Symmetry::Full);
+        assert_eq!(full.symmetry.fraction(), 1.0);
+        let q = try_resolve(smooth, "{symmetry: quarter}").unwrap().1;
+        assert_eq!(q.symmetry.fraction(), 0.25);
+        assert_eq!(
+            try_resolve(ribbed, "{symmetry: full}").unwrap().1.symmetry,
+            Symmetry::Full
+        );
+        // The resolved choice is what gets hashed: it serialises by name.
+        let json = serde_json::to_value(&q).unwrap();
+        assert_eq!(json["symmetry"], "quarter");
+    }
+
+    /// A quarter model of a ribbed bar is rejected naming `specimen.symmetry` and why (spiral ribs have no mirror planes; SPEC §8).
+    #[test]
+    fn quarter_ribbed_bar_is_rejected() {
+        let msg = err("{kind: ribbed, diameter: 8 mm}", "{symmetry: quarter}");
+        assert!(
+            msg.contains("specimen.symmetry")
+                && msg.contains("smooth bar")
+                && msg.contains("mirror"),
+            "{msg}"
+        );
+        assert!(serde_yaml::from_str::<RawSpecimen>("{symmetry: half}").is_err());
     }
 
     /// l_adh = L is allowed (SPEC §2: l_adh ≤ L).
