@@ -32,6 +32,10 @@ pub const REQUIRED_SURFACES: [&str; 5] = [
 ];
 /// Physical surface that may be absent (no free zone when l_adh = L).
 pub const OPTIONAL_SURFACES: [&str; 1] = ["interface_free"];
+/// Physical surfaces of a quarter model's mirror planes x = 0 and y = 0
+/// (steel and concrete faces). Both present: [`Symmetry::Quarter`]; both
+/// absent: [`Symmetry::Full`]; one alone is an error.
+pub const SYMMETRY_SURFACES: [&str; 2] = ["symmetry_x", "symmetry_y"];
 
 /// Counts and measures of a built model, written as `mesh.json`.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
@@ -63,7 +67,39 @@ pub struct MeshReport {
     /// Steel and concrete volumes, m³.
     pub volume_steel_m3: f64,
     pub volume_concrete_m3: f64,
+    /// The modelled part, `"full"` or `"quarter"` (x ≥ 0, y ≥ 0): the
+    /// counts, areas and volumes above are the modelled part's.
+    #[serde(default, with = "symmetry_name")]
+    pub symmetry: Symmetry,
+    /// Nodes held on the mirror planes x = 0 and y = 0 (both sides, twins included).
+    #[serde(default)]
+    pub symmetry_nodes_x: usize,
+    #[serde(default)]
+    pub symmetry_nodes_y: usize,
     pub timings_s: Timings,
+}
+
+/// `Symmetry` as the lower-case name `geometry.json` also uses.
+mod symmetry_name {
+    use crate::model::Symmetry;
+    use serde::{Deserialize, Deserializer, Serializer};
+
+    pub fn serialize<S: Serializer>(s: &Symmetry, ser: S) -> Result<S::Ok, S::Error> {
+        ser.serialize_str(match s {
+            Symmetry::Full => "full",
+            Symmetry::Quarter => "quarter",
+        })
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(de: D) -> Result<Symmetry, D::Error> {
+        match String::deserialize(de)?.as_str() {
+            "full" => Ok(Symmetry::Full),
+            "quarter" => Ok(Symmetry::Quarter),
+            other => Err(serde::de::Error::custom(format!(
+                "symmetry {other:?}: expected \"full\" or \"quarter\""
+            ))),
+        }
+    }
 }
 
 /// Wall-clock times of the mesh stage's steps, s.
@@ -384,12 +420,54 @@ pub fn build_model(
         v.dedup();
         Ok(v)
     };
+    // Mirror-plane faces belong to either side; a node on the plane gets the
+    // id of every side whose tets it touches, so an interface node lying in
+    // the plane is held through its steel original and its concrete twin.
+    let mirror_set = |group: &str| -> Result<Vec<u32>, MeshError> {
+        let mut v = Vec::new();
+        for tri in raw.surfaces.get(group).unwrap_or(&empty) {
+            for &i in tri {
+                if !in_steel[i as usize] && !in_concrete[i as usize] {
+                    return Err(topo(format!(
+                        "node {} of physical surface \"{group}\" belongs to no tet",
+                        raw.node_tags[i as usize]
+                    )));
+                }
+                if in_steel[i as usize] {
+                    v.push(new_id[i as usize]);
+                }
+                if in_concrete[i as usize] {
+                    v.push(concrete_id(i));
+                }
+            }
+        }
+        v.sort_unstable();
+        v.dedup();
+        Ok(v)
+    };
+    let present = SYMMETRY_SURFACES.map(|g| raw.surfaces.get(g).is_some_and(|v| !v.is_empty()));
+    let symmetry = match present {
+        [true, true] => Symmetry::Quarter,
+        [false, false] => Symmetry::Full,
+        _ => {
+            let (have, lack) = if present[0] {
+                (SYMMETRY_SURFACES[0], SYMMETRY_SURFACES[1])
+            } else {
+                (SYMMETRY_SURFACES[1], SYMMETRY_SURFACES[0])
+            };
+            return Err(missing(
+                lack,
+                &format!("a physical surface of triangles: \"{have}\" is present, and a quarter model needs both mirror planes"),
+            ));
+        }
+    };
     let node_sets = NodeSets {
         bar_loaded_end: set("bar_loaded_end", Region::Steel)?,
         bar_free_end: set("bar_free_end", Region::Steel)?,
         concrete_bearing_face: set("concrete_bearing_face", Region::Concrete)?,
         concrete_free_face: set("concrete_free_face", Region::Concrete)?,
-        ..Default::default()
+        symmetry_x: mirror_set(SYMMETRY_SURFACES[0])?,
+        symmetry_y: mirror_set(SYMMETRY_SURFACES[1])?,
     };
 
     let n_tets = tets.len() as f64;
@@ -424,6 +502,9 @@ pub fn build_model(
             .sum(),
         volume_steel_m3: vol_s,
         volume_concrete_m3: vol_c,
+        symmetry,
+        symmetry_nodes_x: node_sets.symmetry_x.len(),
+        symmetry_nodes_y: node_sets.symmetry_y.len(),
         ..Default::default()
     };
     let model = Model {
@@ -436,7 +517,7 @@ pub fn build_model(
         node_sets,
         bar_diameter,
         adhesive_length,
-        symmetry: Default::default(),
+        symmetry,
     };
     Ok((model, report))
 }

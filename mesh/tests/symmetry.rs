@@ -1,0 +1,138 @@
+//! The quarter model of the smooth specimen (issue 7: symmetry): geom's
+//! quarter smooth-80 meshed by gmsh and built into a model whose mirror-plane
+//! node sets the solver holds.
+
+mod common;
+use common::*;
+use mesh::{build_model, mesh_specimen, read_msh, MeshError, MeshSpec, Model, Region, Symmetry};
+use std::collections::BTreeSet;
+use std::f64::consts::PI;
+
+/// smooth-80's specimen (d = 8 mm, L = 80 mm, l_adh = 40 mm).
+const D80: f64 = 0.008;
+const L80: f64 = 0.080;
+const LADH80: f64 = 0.040;
+
+/// Quarter smooth-80 at h_interface = 0.8 mm: the model passes every topology check (including the duplication
+/// rule where the interface meets the mirror planes), its interface areas and volumes ×4 are the whole
+/// specimen's within 1 %, and the mirror-plane node sets are complete, on their planes and hold both sides
+/// (issue 7; SPEC §2, §4).
+#[test]
+fn quarter_smooth80_model() {
+    let dir = scratch("quarter-smooth80");
+    let bar: geom::spec::RawBar = serde_yaml::from_str("{kind: smooth, diameter: 8 mm}").unwrap();
+    let specimen: geom::spec::RawSpecimen = serde_yaml::from_str(
+        "{cube_side: 80 mm, adhesive_length: 40 mm, free_overhang: 2 mm, loaded_overhang: 4 mm}",
+    )
+    .unwrap();
+    let (bar, specimen) = geom::spec::resolve(&bar, &specimen).unwrap();
+    assert_eq!(specimen.symmetry, geom::spec::Symmetry::Quarter);
+    geom::build_geometry(&bar, &specimen, gmsh(), &dir).unwrap();
+    let spec = MeshSpec {
+        h_interface: 0.8e-3,
+        h_outer: 5e-3,
+        ..MeshSpec::default()
+    };
+    let r = mesh_specimen(gmsh(), &dir.join("specimen.geo"), &spec, D80, LADH80, &dir).unwrap();
+    let m = Model::load(&dir.join(mesh::MODEL_FILE)).unwrap();
+    check_topology(&m);
+    assert_eq!(m.symmetry, Symmetry::Quarter);
+    assert_eq!(r.symmetry, Symmetry::Quarter);
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join(mesh::REPORT_FILE)).unwrap())
+            .unwrap();
+    assert_eq!(json["symmetry"], "quarter");
+
+    // Whole-specimen measures from the quarter.
+    let f = m.symmetry.force_factor();
+    for (quarter, whole, what) in [
+        (
+            r.interface_area_adhesive_m2,
+            PI * D80 * LADH80,
+            "adhesive area",
+        ),
+        (
+            r.interface_area_free_m2,
+            PI * D80 * (L80 - LADH80),
+            "free area",
+        ),
+        (
+            r.volume_steel_m3,
+            PI * D80 * D80 / 4.0 * (L80 + 0.006),
+            "steel volume",
+        ),
+        (
+            r.volume_concrete_m3,
+            L80.powi(3) - PI * D80 * D80 / 4.0 * L80,
+            "concrete volume",
+        ),
+    ] {
+        let rel = (f * quarter - whole).abs() / whole;
+        assert!(rel < 0.01, "{what}: 4 × {quarter} vs {whole}: {rel}");
+    }
+    // Nothing of the model lies outside the quarter.
+    assert!(m.nodes.iter().all(|p| p[0] > -1e-12 && p[1] > -1e-12));
+
+    let sets = [
+        (&m.node_sets.symmetry_x, 0usize),
+        (&m.node_sets.symmetry_y, 1usize),
+    ];
+    for (set, axis) in sets {
+        assert!(!set.is_empty());
+        assert_eq!(set.len(), [r.symmetry_nodes_x, r.symmetry_nodes_y][axis]);
+        for &i in set {
+            let c = m.nodes[i as usize][axis];
+            assert!(c.abs() < 1e-9, "node {i} of the plane {axis} set at {c} m");
+        }
+        // Complete: every node of the model on the plane is in the set.
+        let on_plane = (0..m.nodes.len() as u32)
+            .filter(|&i| m.nodes[i as usize][axis].abs() < 1e-12)
+            .count();
+        assert_eq!(set.len(), on_plane, "plane {axis}: set incomplete");
+        let sides: BTreeSet<_> = set
+            .iter()
+            .map(|&i| format!("{:?}", m.node_region[i as usize]))
+            .collect();
+        assert_eq!(sides.len(), 2, "plane {axis}: both sides, got {sides:?}");
+        // Interface elements with an edge on the plane: both twins of its nodes are held.
+        let members: BTreeSet<u32> = set.iter().copied().collect();
+        let mut edge_elements = 0;
+        for e in &m.interfaces {
+            let on: Vec<usize> = (0..3)
+                .filter(|&k| m.nodes[e.nodes[k] as usize][axis].abs() < 1e-12)
+                .collect();
+            if on.len() == 2 {
+                edge_elements += 1;
+            }
+            for k in on {
+                assert!(members.contains(&e.nodes[k]) && members.contains(&e.nodes[k + 3]));
+                assert_eq!(m.node_region[e.nodes[k] as usize], Region::Steel);
+                assert_eq!(m.node_region[e.nodes[k + 3] as usize], Region::Concrete);
+            }
+        }
+        assert!(
+            edge_elements > 10,
+            "plane {axis}: {edge_elements} interface edges on the plane"
+        );
+    }
+
+    // One mirror plane alone is not a model: the missing group is named.
+    let mut raw = read_msh(&dir.join(mesh::MSH_FILE)).unwrap();
+    raw.surfaces.remove("symmetry_y");
+    match build_model(&raw, D80, LADH80) {
+        Err(MeshError::MissingGroup { group, .. }) => assert_eq!(group, "symmetry_y"),
+        other => panic!("expected a missing symmetry_y, got {:?}", other.map(|_| ())),
+    }
+}
+
+/// A mesh without mirror-plane groups builds the whole specimen with empty mirror sets (issue 7: full otherwise).
+#[test]
+fn full_mesh_has_no_symmetry_sets() {
+    let dir = scratch("full-no-symmetry");
+    let msh = mesh_file(&data("smooth.geo"), &small_spec(0.0016), &dir);
+    let (m, r) = build_model(&read_msh(&msh).unwrap(), D, L_ADH).unwrap();
+    assert_eq!(m.symmetry, Symmetry::Full);
+    assert_eq!(r.symmetry, Symmetry::Full);
+    assert!(m.node_sets.symmetry_x.is_empty() && m.node_sets.symmetry_y.is_empty());
+    assert!(m.nodes.iter().any(|p| p[0] < -1e-3));
+}
