@@ -4,6 +4,13 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh --no-build
+# The Snakemake export is tested against a real snakemake.
+if ! .tools/snakemake-venv/bin/snakemake --version >/dev/null 2>&1; then
+  echo "test: installing snakemake into .tools/snakemake-venv"
+  rm -rf .tools/snakemake-venv
+  python3 -m venv .tools/snakemake-venv
+  .tools/snakemake-venv/bin/pip install -q --disable-pip-version-check "snakemake==9.27.1"
+fi
 cargo fmt --all --check
 cargo clippy --workspace --all-targets --quiet -- -D warnings
 cargo test --workspace

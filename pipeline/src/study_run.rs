@@ -180,9 +180,8 @@ pub fn collect(study: &Study, work: &Path, out: &Path, printer: &Printer) -> Res
             .join(", ");
         cases.push(StudyCase::from_summary(&case.name, &case.parameters, &summary));
         if study.kind == StudyKind::Convergence {
-            if let Some(h) = resolved_h(work, case) {
-                grids.push((h, summary.clone()));
-            }
+            let scene = crate::scene::Scene::load(&study.base, &case.overrides)?;
+            grids.push((scene.mesh.h_interface, summary.clone()));
         }
         curves.push((label, rows));
     }
@@ -197,13 +196,6 @@ pub fn collect(study: &Study, work: &Path, out: &Path, printer: &Printer) -> Res
     }
     printer.line(&format!("study tables and plots: {}", out.display()));
     Ok(())
-}
-
-/// The interface mesh size a case actually used, m (from its mesh.json).
-fn resolved_h(work: &Path, case: &Case) -> Option<f64> {
-    let text = std::fs::read(work.join(&case.name).join("mesh.json")).ok()?;
-    let v: serde_json::Value = serde_json::from_slice(&text).ok()?;
-    v.pointer("/h_interface").and_then(|x| x.as_f64())
 }
 
 fn convergence(grids: &[(f64, serde_json::Value)], out: &Path) -> Result<()> {
@@ -229,8 +221,16 @@ fn convergence(grids: &[(f64, serde_json::Value)], out: &Path) -> Result<()> {
     .filter_map(|(name, p)| post::convergence_study(name, &quantity(p)).ok())
     .collect();
     post::write_convergence_tables(&studies, &out.join("convergence.csv"), &out.join("convergence.md"))?;
-    let series: Vec<_> = studies.iter().map(post::ErrorTimeSeries::from_study).collect();
-    post::error_vs_time_plot(&series, &out.join("error_vs_time.png"), &out.join("error_vs_time.svg"))?;
+    let series: Vec<_> = studies
+        .iter()
+        .map(post::ErrorTimeSeries::from_study)
+        .filter(|s| !s.points.is_empty())
+        .collect();
+    // A series whose triplets all diverged has no error to plot; the
+    // tables say why.
+    if !series.is_empty() {
+        post::error_vs_time_plot(&series, &out.join("error_vs_time.png"), &out.join("error_vs_time.svg"))?;
+    }
     Ok(())
 }
 
