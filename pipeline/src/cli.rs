@@ -56,6 +56,34 @@ pub enum Command {
     Material(MaterialArgs),
     /// Run a study: a base spec with lists of values, or a mesh-convergence series.
     Study(StudyArgs),
+    /// Benchmarks: run time against error, written as Markdown tables and plots.
+    Bench(BenchArgs),
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum, PartialEq, Eq)]
+pub enum BenchKind {
+    /// Linear-elastic perfect-bond pull-out: ribbar's linear solvers against CalculiX.
+    Linear,
+    /// Mesh series (h_interface 1.6 → 0.4 mm) on smooth-80 and R1 with GCI.
+    MeshSeries,
+    /// Solver settings on R1 at a fixed mesh against a tight-tolerance run.
+    SolverSettings,
+}
+
+#[derive(Debug, Args)]
+pub struct BenchArgs {
+    /// Which benchmark.
+    #[arg(value_enum)]
+    pub kind: BenchKind,
+    /// Work directory for the benchmark's runs.
+    #[arg(long, default_value = "ribbar-work")]
+    pub work: PathBuf,
+    /// Where the Markdown table and plots are written.
+    #[arg(long, default_value = "docs/bench")]
+    pub out: PathBuf,
+    /// Override a spec key of the benchmark's scenes (repeatable).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub overrides: Vec<String>,
 }
 
 #[derive(Debug, Args)]

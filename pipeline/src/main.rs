@@ -49,6 +49,7 @@ fn dispatch(command: Command, printer: &Printer) -> Result<ExitCode> {
         Command::Clean(a) => pipeline::commands::clean(&a, printer),
         Command::Material(a) => pipeline::commands::material(&a),
         Command::Study(a) => pipeline::study_run::run(&a, printer),
+        Command::Bench(a) => pipeline::bench::run(&a, printer),
     }
 }
 
