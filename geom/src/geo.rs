@@ -6,7 +6,11 @@
 //! the bar axis (their base also dips into the core); one `BooleanUnion`;
 //! `BooleanIntersection` with a cylinder spanning the bar's length trims the
 //! ribs crossing the bar ends; `BooleanFragments` with the cube and the plane
-//! z = l_adh makes the interface conformal. Entities are found by bounding
+//! z = l_adh makes the interface conformal. A quarter model (smooth bars,
+//! `specimen.symmetry`) intersects the bar with the box x, y ≥ 0 before the
+//! fragments, uses the quarter of the cube and of the plane, and adds the
+//! groups `symmetry_x` / `symmetry_y` (all faces on x = 0 / y = 0).
+//! Entities are found by bounding
 //! box with `Geometry.OCCBoundsUseStl = 1` (tight boxes on curved faces),
 //! never by literal tag. Mesh sizes come from `DefineConstant`s so that the
 //! mesh stage sets them with `-setnumber`; the script never meshes.
