@@ -169,6 +169,8 @@ impl Model {
             ("bar_free_end", &s.bar_free_end),
             ("concrete_bearing_face", &s.concrete_bearing_face),
             ("concrete_free_face", &s.concrete_free_face),
+            ("symmetry_x", &s.symmetry_x),
+            ("symmetry_y", &s.symmetry_y),
         ] {
             if !v.iter().all(ok) {
                 return Err(format!("node set {name} references a node id ≥ {n}"));
