@@ -142,6 +142,13 @@ pub enum AssemblyError {
 }
 
 const NONE: u32 = u32::MAX;
+/// Set in a scatter-map entry when the element's local lower entry (a ≥ b)
+/// lands in the global upper triangle (free index of a < that of b): its
+/// value then belongs to the transposed position. Without this the lower
+/// store of an unsymmetric element matrix (Mazars and FCZM consistent
+/// tangents) mixes K_ab and K_ba by the accident of the DOF numbering.
+const SWAP: u32 = 1 << 31;
+const POS: u32 = !SWAP;
 const TET_LOWER: usize = 78;
 /// Lower-triangle entries of one node pair's 6×6 block (s_i, c_i).
 const PAIR_LOWER: usize = 21;
@@ -335,7 +342,7 @@ impl System {
                 col_ptr.push(row_idx.len());
             }
         }
-        if row_idx.len() >= NONE as usize {
+        if row_idx.len() >= POS as usize {
             return Err(AssemblyError::Model(
                 "too many matrix entries for 32-bit scatter maps".into(),
             ));
@@ -343,12 +350,12 @@ impl System {
         let position = |gi: usize, gj: usize| -> u32 {
             match (dofs.free_index(gi), dofs.free_index(gj)) {
                 (Some(i), Some(j)) => {
-                    let (r, c) = if i >= j { (i, j) } else { (j, i) };
+                    let (r, c, flag) = if i >= j { (i, j, 0) } else { (j, i, SWAP) };
                     let col = &row_idx[col_ptr[c]..col_ptr[c + 1]];
                     let k = col
                         .binary_search(&r)
                         .expect("pattern holds every element entry");
-                    (col_ptr[c] + k) as u32
+                    (col_ptr[c] + k) as u32 | flag
                 }
                 _ => NONE,
             }
@@ -417,7 +424,8 @@ impl System {
     /// displacement `u` (m, length 3·nodes) from the `committed` states:
     /// writes the trial states, the internal force `f_int` (N, global) and,
     /// when `matrix` is given, the lower-triangle tangent values (N/m) of the
-    /// tangent `kind`.
+    /// tangent `kind` (K_ij for i ≥ j: an unsymmetric tangent's upper
+    /// triangle is dropped; see [`System::evaluate_full`]).
     #[allow(clippy::too_many_arguments)]
     pub fn evaluate(
         &self,
@@ -427,18 +435,40 @@ impl System {
         trial: &mut States,
         kind: TangentKind,
         f_int: &mut [f64],
+        matrix: Option<&mut [f64]>,
+    ) -> Result<EvalTimings, AssemblyError> {
+        self.evaluate_full(laws, u, committed, trial, kind, f_int, matrix, None)
+    }
+
+    /// As [`System::evaluate`], and when `upper` is given it receives, in the
+    /// same lower-triangle pattern, the transposed entries: `upper[k]` =
+    /// K_ji where `lower[k]` = K_ij (i ≥ j). Together they hold the whole
+    /// (possibly unsymmetric) consistent tangent.
+    #[allow(clippy::too_many_arguments)]
+    pub fn evaluate_full(
+        &self,
+        laws: &ElementLaws,
+        u: &[f64],
+        committed: &States,
+        trial: &mut States,
+        kind: TangentKind,
+        f_int: &mut [f64],
         mut matrix: Option<&mut [f64]>,
+        mut upper: Option<&mut [f64]>,
     ) -> Result<EvalTimings, AssemblyError> {
         let mut timings = EvalTimings::default();
         f_int.iter_mut().for_each(|v| *v = 0.0);
         if let Some(m) = matrix.as_deref_mut() {
             m.iter_mut().for_each(|v| *v = 0.0);
         }
+        if let Some(m) = upper.as_deref_mut() {
+            m.iter_mut().for_each(|v| *v = 0.0);
+        }
         let want_k = matrix.is_some();
 
         // Tets, block by block: parallel kernels into buffers, serial scatter.
         let mut fbuf = vec![[0.0f64; 12]; BLOCK.min(self.tets.len())];
-        let mut kbuf = vec![[0.0f64; TET_LOWER]; if want_k { fbuf.len() } else { 0 }];
+        let mut kbuf = vec![[0.0f64; 144]; if want_k { fbuf.len() } else { 0 }];
         let n_tets = self.tets.len();
         let mut start = 0;
         while start < n_tets {
@@ -446,9 +476,9 @@ impl System {
             let len = end - start;
             let t0 = Instant::now();
             let states = &mut trial.bulk[start..end];
-            let kslice: &mut [[f64; TET_LOWER]] = if want_k { &mut kbuf[..len] } else { &mut [] };
+            let kslice: &mut [[f64; 144]] = if want_k { &mut kbuf[..len] } else { &mut [] };
             let body = |(off, (state, f)): (usize, (&mut BulkState, &mut [f64; 12])),
-                        k: Option<&mut [f64; TET_LOWER]>|
+                        k: Option<&mut [f64; 144]>|
              -> Result<(), AssemblyError> {
                 let index = start + off;
                 let g = &self.tet_geom[index];
@@ -477,15 +507,7 @@ impl System {
                             what: "tangent",
                         });
                     }
-                    let mut full = [0.0; 144];
-                    g.stiffness(&r.tangent, &mut full);
-                    let mut c = 0;
-                    for a in 0..12 {
-                        for b in 0..=a {
-                            k[c] = full[12 * a + b];
-                            c += 1;
-                        }
-                    }
+                    g.stiffness(&r.tangent, k);
                 }
                 Ok(())
             };
@@ -512,11 +534,7 @@ impl System {
                     f_int[di] += fbuf[off][i];
                 }
                 if let Some(m) = matrix.as_deref_mut() {
-                    for (c, &pos) in self.tet_map[index].iter().enumerate() {
-                        if pos != NONE {
-                            m[pos as usize] += kbuf[off][c];
-                        }
-                    }
+                    scatter_block::<12>(&self.tet_map[index], &kbuf[off], m, upper.as_deref_mut());
                 }
             }
             timings.assembly += t1.elapsed().as_secs_f64();
@@ -525,7 +543,7 @@ impl System {
 
         // Interfaces: few compared with tets; one parallel pass.
         let t0 = Instant::now();
-        type PairOut = ([f64; 18], [[f64; PAIR_LOWER]; INTERFACE_POINTS]);
+        type PairOut = ([f64; 18], [[f64; 36]; INTERFACE_POINTS]);
         let results: Vec<(usize, [InterfaceState; INTERFACE_POINTS], PairOut)> = self
             .iface_active
             .par_iter()
@@ -539,7 +557,7 @@ impl System {
                 let nodes = &self.iface_nodes[index];
                 let ue: [f64; 18] = std::array::from_fn(|i| u[3 * nodes[i / 3] as usize + i % 3]);
                 let mut f = [0.0; 18];
-                let mut klow = [[0.0; PAIR_LOWER]; INTERFACE_POINTS];
+                let mut kpair = [[0.0; 36]; INTERFACE_POINTS];
                 let mut st = [InterfaceState::default(); INTERFACE_POINTS];
                 for p in 0..INTERFACE_POINTS {
                     let jump = kern.local_jump(&ue, p);
@@ -580,21 +598,19 @@ impl System {
                                 3 * (p + 3) + i - 3
                             }
                         });
-                        let mut c = 0;
                         for a in 0..6 {
-                            for b in 0..=a {
-                                klow[p][c] = full[18 * d[a] + d[b]];
-                                c += 1;
+                            for b in 0..6 {
+                                kpair[p][6 * a + b] = full[18 * d[a] + d[b]];
                             }
                         }
                     }
                 }
-                Ok((index, st, (f, klow)))
+                Ok((index, st, (f, kpair)))
             })
             .collect::<Result<_, AssemblyError>>()?;
         timings.constitutive += t0.elapsed().as_secs_f64();
         let t1 = Instant::now();
-        for (slot, (index, st, (f, klow))) in results.into_iter().enumerate() {
+        for (slot, (index, st, (f, kpair))) in results.into_iter().enumerate() {
             trial.interface[INTERFACE_POINTS * index..INTERFACE_POINTS * (index + 1)]
                 .copy_from_slice(&st);
             let nodes = &self.iface_nodes[index];
@@ -602,16 +618,44 @@ impl System {
                 f_int[3 * nodes[i / 3] as usize + i % 3] += fi;
             }
             if let Some(m) = matrix.as_deref_mut() {
-                for (map, kp) in self.iface_map[slot].iter().zip(&klow) {
-                    for (c, &pos) in map.iter().enumerate() {
-                        if pos != NONE {
-                            m[pos as usize] += kp[c];
-                        }
-                    }
+                for (map, kp) in self.iface_map[slot].iter().zip(&kpair) {
+                    scatter_block::<6>(map, kp, m, upper.as_deref_mut());
                 }
             }
         }
         timings.assembly += t1.elapsed().as_secs_f64();
         Ok(timings)
+    }
+}
+
+/// Adds a row-major N×N element matrix `k` into the global lower values
+/// (and the transposed values `upper`) through the element's lower-triangle
+/// scatter map (entries (a, b), a ≥ b, row by row).
+fn scatter_block<const N: usize>(
+    map: &[u32],
+    k: &[f64],
+    lower: &mut [f64],
+    mut upper: Option<&mut [f64]>,
+) {
+    let mut c = 0;
+    for a in 0..N {
+        for b in 0..=a {
+            let e = map[c];
+            c += 1;
+            if e == NONE {
+                continue;
+            }
+            let pos = (e & POS) as usize;
+            let (kab, kba) = (k[N * a + b], k[N * b + a]);
+            let (lo, up) = if e & SWAP == 0 {
+                (kab, kba)
+            } else {
+                (kba, kab)
+            };
+            lower[pos] += lo;
+            if let Some(u) = upper.as_deref_mut() {
+                u[pos] += up;
+            }
+        }
     }
 }

@@ -48,6 +48,12 @@ pub enum LinearError {
         tolerance: f64,
         reached: f64,
     },
+    #[error("GMRES did not reach relative residual {tolerance:e} in {iterations} iterations (reached {reached:e})")]
+    KrylovNotConverged {
+        iterations: usize,
+        tolerance: f64,
+        reached: f64,
+    },
     #[error("non-finite value in the linear solve")]
     NonFinite,
 }
@@ -336,6 +342,169 @@ pub fn pcg(
         tolerance,
         reached: rel,
     })
+}
+
+/// A general (possibly unsymmetric) square matrix in the symmetric pattern
+/// of [`SymLower`]: `lower[k]` = A_ij and `upper[k]` = A_ji for the stored
+/// position k = (i, j), i ≥ j (see `System::evaluate_full`).
+#[derive(Debug, Clone, Copy)]
+pub struct SplitMatrix<'a> {
+    pub col_ptr: &'a [usize],
+    pub row_idx: &'a [usize],
+    pub lower: &'a [f64],
+    pub upper: &'a [f64],
+}
+
+impl SplitMatrix<'_> {
+    pub fn n(&self) -> usize {
+        self.col_ptr.len() - 1
+    }
+
+    /// y = A x.
+    pub fn mul(&self, x: &[f64], y: &mut [f64]) {
+        y.iter_mut().for_each(|v| *v = 0.0);
+        for j in 0..self.n() {
+            let xj = x[j];
+            let mut acc = 0.0;
+            for k in self.col_ptr[j]..self.col_ptr[j + 1] {
+                let i = self.row_idx[k];
+                if i == j {
+                    acc += self.lower[k] * xj;
+                } else {
+                    y[i] += self.lower[k] * xj;
+                    acc += self.upper[k] * x[i];
+                }
+            }
+            y[j] += acc;
+        }
+    }
+
+    /// Lower values of the symmetric part (A + Aᵀ)/2.
+    pub fn symmetric_part(&self, out: &mut [f64]) {
+        for ((o, l), u) in out.iter_mut().zip(self.lower).zip(self.upper) {
+            *o = 0.5 * (l + u);
+        }
+    }
+}
+
+/// Result of a GMRES solve.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GmresInfo {
+    pub iterations: usize,
+    /// Final ‖b − A x‖ / ‖b‖ (the Arnoldi estimate).
+    pub relative_residual: f64,
+}
+
+/// GMRES for A x = b from x = 0, right-preconditioned by the Cholesky
+/// factor `m` of an SPD matrix close to A (A M⁻¹ y = b, x = M⁻¹ y), without
+/// restart: stops at ‖b − A x‖ ≤ `tolerance`·‖b‖ or fails after
+/// `max_iterations` (storage: `max_iterations` + 1 vectors). Right
+/// preconditioning makes the monitored residual the true one, so the Newton
+/// correction's accuracy does not depend on the preconditioner's quality.
+pub fn gmres(
+    a: SplitMatrix<'_>,
+    m: &Cholesky,
+    b: &[f64],
+    x: &mut [f64],
+    tolerance: f64,
+    max_iterations: usize,
+) -> Result<GmresInfo, LinearError> {
+    let n = b.len();
+    x.iter_mut().for_each(|v| *v = 0.0);
+    let beta = norm(b);
+    if beta == 0.0 {
+        return Ok(GmresInfo {
+            iterations: 0,
+            relative_residual: 0.0,
+        });
+    }
+    if !beta.is_finite() {
+        return Err(LinearError::NonFinite);
+    }
+    let kmax = max_iterations.max(1);
+    let mut v: Vec<Vec<f64>> = Vec::with_capacity(kmax + 1);
+    v.push(b.iter().map(|bi| bi / beta).collect());
+    // Hessenberg columns after the Givens rotations (upper triangular R).
+    let mut h: Vec<Vec<f64>> = Vec::with_capacity(kmax);
+    let mut cs: Vec<f64> = Vec::with_capacity(kmax);
+    let mut sn: Vec<f64> = Vec::with_capacity(kmax);
+    let mut g = vec![beta];
+    let mut z = vec![0.0; n];
+    let mut w = vec![0.0; n];
+    let mut rel = 1.0;
+    let mut k = 0;
+    while k < kmax {
+        z.copy_from_slice(&v[k]);
+        m.solve_in_place(&mut z)?;
+        a.mul(&z, &mut w);
+        let mut col = vec![0.0; k + 2];
+        // Modified Gram–Schmidt.
+        for (i, vi) in v.iter().enumerate() {
+            let hij = dot(&w, vi);
+            col[i] = hij;
+            w.iter_mut().zip(vi).for_each(|(wj, vj)| *wj -= hij * vj);
+        }
+        let hnext = norm(&w);
+        if !hnext.is_finite() {
+            return Err(LinearError::NonFinite);
+        }
+        col[k + 1] = hnext;
+        for i in 0..k {
+            let (c, s) = (cs[i], sn[i]);
+            let (p, q) = (col[i], col[i + 1]);
+            col[i] = c * p + s * q;
+            col[i + 1] = -s * p + c * q;
+        }
+        let r = col[k].hypot(col[k + 1]);
+        let (c, s) = if r == 0.0 {
+            (1.0, 0.0)
+        } else {
+            (col[k] / r, col[k + 1] / r)
+        };
+        cs.push(c);
+        sn.push(s);
+        col[k] = r;
+        col.truncate(k + 1);
+        h.push(col);
+        g.push(-s * g[k]);
+        g[k] *= c;
+        k += 1;
+        rel = g[k].abs() / beta;
+        if rel <= tolerance || hnext == 0.0 {
+            break;
+        }
+        v.push(w.iter().map(|wj| wj / hnext).collect());
+    }
+    // y = R⁻¹ g, x = M⁻¹ V y.
+    let mut y = vec![0.0; k];
+    for i in (0..k).rev() {
+        let mut s = g[i];
+        for (j, yj) in y.iter().enumerate().skip(i + 1) {
+            s -= h[j][i] * yj;
+        }
+        if h[i][i] == 0.0 {
+            return Err(LinearError::NonFinite);
+        }
+        y[i] = s / h[i][i];
+    }
+    z.iter_mut().for_each(|zj| *zj = 0.0);
+    for (vi, yi) in v.iter().zip(&y) {
+        z.iter_mut().zip(vi).for_each(|(zj, vj)| *zj += yi * vj);
+    }
+    m.solve_in_place(&mut z)?;
+    x.copy_from_slice(&z);
+    if rel <= tolerance {
+        Ok(GmresInfo {
+            iterations: k,
+            relative_residual: rel,
+        })
+    } else {
+        Err(LinearError::KrylovNotConverged {
+            iterations: k,
+            tolerance,
+            reached: rel,
+        })
+    }
 }
 
 pub(crate) fn dot(a: &[f64], b: &[f64]) -> f64 {

@@ -151,11 +151,16 @@ impl RawLoading {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default)]
 #[serde(rename_all = "snake_case")]
 pub enum LinearSolverKind {
-    /// Sparse Cholesky of every new matrix.
-    #[default]
+    /// Sparse Cholesky of every new matrix (of the symmetric part of an
+    /// unsymmetric consistent tangent).
     Cholesky,
     /// Conjugate gradients preconditioned by a reused Cholesky factor.
     Pcg,
+    /// Newton–Krylov: GMRES on the exact (unsymmetric) consistent tangent,
+    /// right-preconditioned by a reused Cholesky factor of its symmetric
+    /// part (or of the secant matrix when that part is indefinite).
+    #[default]
+    Gmres,
 }
 
 /// `solver` as written.
@@ -171,6 +176,8 @@ pub struct RawSolver {
     pub ordering: Option<Ordering>,
     pub pcg_tolerance: Option<f64>,
     pub pcg_max_iterations: Option<usize>,
+    pub krylov_tolerance: Option<f64>,
+    pub krylov_max_iterations: Option<usize>,
 }
 
 /// Newton settings, resolved.
@@ -192,6 +199,12 @@ pub struct SolverSettings {
     pub pcg_tolerance: f64,
     /// PCG iterations before the preconditioner is refactorised.
     pub pcg_max_iterations: usize,
+    /// GMRES relative residual tolerance of a Newton correction (the
+    /// inexact-Newton forcing term).
+    pub krylov_tolerance: f64,
+    /// GMRES iterations before the preconditioner is refactorised; a solve
+    /// that needed more than half of them refactorises at the next iteration.
+    pub krylov_max_iterations: usize,
 }
 
 impl Default for SolverSettings {
@@ -202,10 +215,12 @@ impl Default for SolverSettings {
             max_iterations: 25,
             tangent: TangentKind::Consistent,
             line_search: true,
-            linear_solver: LinearSolverKind::Cholesky,
+            linear_solver: LinearSolverKind::Gmres,
             ordering: Ordering::Metis,
             pcg_tolerance: 1e-8,
             pcg_max_iterations: 20,
+            krylov_tolerance: 1e-6,
+            krylov_max_iterations: 40,
         }
     }
 }
@@ -262,6 +277,16 @@ impl RawSolver {
                 "solver.pcg_max_iterations",
                 self.pcg_max_iterations,
                 d.pcg_max_iterations,
+            )?,
+            krylov_tolerance: unit(
+                "solver.krylov_tolerance",
+                self.krylov_tolerance,
+                d.krylov_tolerance,
+            )?,
+            krylov_max_iterations: count(
+                "solver.krylov_max_iterations",
+                self.krylov_max_iterations,
+                d.krylov_max_iterations,
             )?,
         })
     }

@@ -1,0 +1,118 @@
+//! A pull-out run on a meshed model, for measuring the nonlinear solver:
+//!
+//! ```text
+//! cargo bench -p solve --bench pullout_run -- SCENE.yaml MODEL.bin [key=value ...]
+//! ```
+//!
+//! `SCENE.yaml` gives the `materials`, `loading` and `solver` sections (a
+//! scene file of `specs/`), `MODEL.bin` the mesh stage's model; each
+//! `key=value` overrides a `solver` key (e.g. `linear_solver=cholesky`,
+//! `tangent=secant`) or, as `loading.key=value`, a `loading` key. Prints
+//! every converged step, every cut-back, and the summary with the phase
+//! times.
+
+use mesh::Model;
+use solve::assembly::{ElementLaws, SharedBulkLaw, SharedInterfaceLaw};
+use solve::pullout::{solve_pullout, CommittedView, Cutback, Observer, StepReport};
+use solve::spec::materials::RawMaterials;
+use solve::spec::solver::{RawLoading, RawSolver};
+use std::sync::Arc;
+
+struct Print;
+impl Observer for Print {
+    fn step_converged(&mut self, r: &StepReport, _: &CommittedView<'_>) {
+        let w = r.times;
+        println!(
+            "step {:>4} u {:.4} mm FED {:.4} mm σ_mb {:.3} MPa it {:>2} h {:.2} µm | {:.2} s (const {:.2} asm {:.2} fact {:.2} solve {:.2})",
+            r.row.step,
+            r.row.u_imposed * 1e3,
+            r.row.fed * 1e3,
+            r.row.bond_stress / 1e6,
+            r.row.iterations,
+            r.step_size * 1e6,
+            w.total,
+            w.constitutive,
+            w.assembly,
+            w.factorisation,
+            w.solve
+        );
+    }
+    fn cutback(&mut self, c: &Cutback) {
+        let h: Vec<String> = c
+            .residual_history
+            .iter()
+            .map(|v| format!("{v:.1e}"))
+            .collect();
+        println!(
+            "cut-back step {} u {:.4} mm: {} [{}]",
+            c.step,
+            c.u_imposed * 1e3,
+            c.reason,
+            h.join(" ")
+        );
+    }
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args()
+        .skip(1)
+        .filter(|a| a != "--bench")
+        .collect();
+    if args.len() < 2 {
+        eprintln!("usage: pullout_run SCENE.yaml MODEL.bin [key=value ...]");
+        return;
+    }
+    let text = std::fs::read_to_string(&args[0]).expect("scene file");
+    let mut scene: serde_yaml::Value = serde_yaml::from_str(&text).expect("scene YAML");
+    for kv in &args[2..] {
+        let (k, v) = kv.split_once('=').expect("key=value");
+        let (section, key) = k.split_once('.').unwrap_or(("solver", k));
+        let map = scene
+            .as_mapping_mut()
+            .unwrap()
+            .entry(section.into())
+            .or_insert(serde_yaml::Value::Mapping(Default::default()));
+        map.as_mapping_mut()
+            .unwrap()
+            .insert(key.into(), serde_yaml::from_str(v).unwrap());
+    }
+    let get = |k: &str| scene.get(k).cloned().unwrap_or(serde_yaml::Value::Null);
+    let mats: RawMaterials = serde_yaml::from_value(get("materials")).expect("materials");
+    let mats = mats.resolve().expect("materials");
+    let loading: RawLoading = serde_yaml::from_value(get("loading")).unwrap_or_default();
+    let loading = loading.resolve().expect("loading");
+    let solver: RawSolver = serde_yaml::from_value(get("solver")).unwrap_or_default();
+    let settings = solver.resolve().expect("solver");
+    let model = Model::load(std::path::Path::new(&args[1])).expect("model");
+    let steel: SharedBulkLaw = Arc::new(mats.steel.law());
+    let adhesive: SharedInterfaceLaw = Arc::new(mats.interface.law);
+    let laws = ElementLaws::sized(
+        &model,
+        |l| {
+            mats.concrete
+                .at_size(l)
+                .map(|law| Arc::new(law) as SharedBulkLaw)
+        },
+        steel,
+        adhesive,
+        None,
+    )
+    .map_err(|(i, e)| format!("tet {i}: {e}"))
+    .expect("laws");
+    println!(
+        "{} nodes, {} tets, {} interface elements; {settings:?}",
+        model.nodes.len(),
+        model.tets.len(),
+        model.interfaces.len()
+    );
+    let res = solve_pullout(&model, &laws, &loading, &settings, None, &mut Print);
+    let summary = match &res {
+        Ok(r) => r.summary.clone(),
+        Err(solve::pullout::SolveError::Stalled { partial, .. }) => {
+            println!("stalled: {}", res.as_ref().err().unwrap());
+            partial.summary.clone()
+        }
+        Err(e) => panic!("{e}"),
+    };
+    println!("{}", serde_json::to_string_pretty(&summary).unwrap());
+}
