@@ -1,11 +1,13 @@
 //! Material laws, element kernels, assembly and the nonlinear pull-out solver.
 
-pub mod laws;
-pub mod material_point;
+pub mod amg;
 pub mod assembly;
 pub mod element;
 pub mod fields;
 pub mod interface_element;
+pub mod laws;
 pub mod linear;
+pub mod linear_elastic;
+pub mod material_point;
 pub mod pullout;
 pub mod spec;

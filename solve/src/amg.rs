@@ -1,0 +1,970 @@
+//! Smoothed-aggregation algebraic multigrid (Vaněk, Mandel & Brezina 1996)
+//! for elasticity, used as the preconditioner of conjugate gradients.
+//!
+//! * Matrices are block sparse rows ([`Bsr`]): 3×3 blocks per node on the
+//!   finest level, 6×6 blocks per aggregate below, both triangles stored so
+//!   the products parallelise over rows.
+//! * Aggregation by node (greedy, three passes) on the block graph, with a
+//!   strength threshold on the block Frobenius norms.
+//! * Tentative prolongator: per aggregate the QR factorisation of the
+//!   near-null space (the 6 rigid-body modes from the node coordinates on
+//!   the finest level, the R factors below); Q is the prolongator block, R
+//!   the coarse near-null space. Dependent columns (small or constrained
+//!   aggregates) become zero columns whose coarse diagonal is set to 1.
+//! * One damped block-Jacobi step smooths the prolongator,
+//!   P = (I − ω D⁻¹A) T with ω = 4 / (3 λ_max(D⁻¹A)); A_c = Pᵀ A P.
+//! * V-cycle with Chebyshev smoothing on D⁻¹A (a polynomial in D⁻¹A:
+//!   symmetric, so the cycle is a valid CG preconditioner, and parallel,
+//!   unlike Gauss–Seidel); the coarsest level is solved by sparse Cholesky.
+//!
+//! Dirichlet DOFs must be eliminated symmetrically before the set-up (row
+//! and column zero, diagonal 1) and their near-null-space rows zeroed, so
+//! the prolongator never interpolates into them.
+
+use crate::linear::{Cholesky, LinearError, Ordering};
+use rayon::prelude::*;
+
+/// Block sparse rows: `rows` block rows of `br`×`bc` blocks (row-major
+/// within a block), sorted block columns per row.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Bsr {
+    /// Block rows.
+    pub rows: usize,
+    /// Block columns.
+    pub cols: usize,
+    /// Rows per block.
+    pub br: usize,
+    /// Columns per block.
+    pub bc: usize,
+    pub row_ptr: Vec<usize>,
+    pub col_idx: Vec<u32>,
+    /// `br·bc` values per stored block.
+    pub values: Vec<f64>,
+}
+
+impl Bsr {
+    /// Stored blocks.
+    pub fn blocks(&self) -> usize {
+        self.col_idx.len()
+    }
+
+    /// Scalar entries stored.
+    pub fn entries(&self) -> usize {
+        self.values.len()
+    }
+
+    /// Block (i, j) position in `col_idx`, if stored.
+    pub fn find(&self, i: usize, j: usize) -> Option<usize> {
+        let s = self.row_ptr[i];
+        self.col_idx[s..self.row_ptr[i + 1]]
+            .binary_search(&(j as u32))
+            .ok()
+            .map(|k| s + k)
+    }
+
+    /// y = A x (parallel over block rows).
+    pub fn mul(&self, x: &[f64], y: &mut [f64]) {
+        match (self.br, self.bc) {
+            (3, 3) => self.mul_fixed::<3, 3>(x, y),
+            (6, 6) => self.mul_fixed::<6, 6>(x, y),
+            _ => self.mul_any(x, y),
+        }
+    }
+
+    fn mul_fixed<const R: usize, const C: usize>(&self, x: &[f64], y: &mut [f64]) {
+        y.par_chunks_mut(R * 256)
+            .enumerate()
+            .for_each(|(chunk, ys)| {
+                for (off, yi) in ys.chunks_mut(R).enumerate() {
+                    let i = chunk * 256 + off;
+                    let mut acc = [0.0f64; R];
+                    for k in self.row_ptr[i]..self.row_ptr[i + 1] {
+                        let j = self.col_idx[k] as usize;
+                        let blk = &self.values[k * R * C..(k + 1) * R * C];
+                        let xj = &x[j * C..(j + 1) * C];
+                        for r in 0..R {
+                            let mut s = 0.0;
+                            for c in 0..C {
+                                s += blk[r * C + c] * xj[c];
+                            }
+                            acc[r] += s;
+                        }
+                    }
+                    yi.copy_from_slice(&acc);
+                }
+            });
+    }
+
+    fn mul_any(&self, x: &[f64], y: &mut [f64]) {
+        let (br, bc) = (self.br, self.bc);
+        y.par_chunks_mut(br).enumerate().for_each(|(i, yi)| {
+            yi.iter_mut().for_each(|v| *v = 0.0);
+            for k in self.row_ptr[i]..self.row_ptr[i + 1] {
+                let j = self.col_idx[k] as usize;
+                let blk = &self.values[k * br * bc..(k + 1) * br * bc];
+                for r in 0..br {
+                    let mut s = 0.0;
+                    for c in 0..bc {
+                        s += blk[r * bc + c] * x[j * bc + c];
+                    }
+                    yi[r] += s;
+                }
+            }
+        });
+    }
+
+    /// The transpose (blocks transposed).
+    pub fn transpose(&self) -> Bsr {
+        let (br, bc) = (self.br, self.bc);
+        let mut count = vec![0usize; self.cols + 1];
+        for &j in &self.col_idx {
+            count[j as usize + 1] += 1;
+        }
+        for j in 0..self.cols {
+            count[j + 1] += count[j];
+        }
+        let row_ptr = count.clone();
+        let mut next = count;
+        let nb = self.blocks();
+        let mut col_idx = vec![0u32; nb];
+        let mut values = vec![0.0; nb * br * bc];
+        for i in 0..self.rows {
+            for k in self.row_ptr[i]..self.row_ptr[i + 1] {
+                let j = self.col_idx[k] as usize;
+                let dst = next[j];
+                next[j] += 1;
+                col_idx[dst] = i as u32;
+                let src = &self.values[k * br * bc..(k + 1) * br * bc];
+                let out = &mut values[dst * br * bc..(dst + 1) * br * bc];
+                for r in 0..br {
+                    for c in 0..bc {
+                        out[c * br + r] = src[r * bc + c];
+                    }
+                }
+            }
+        }
+        Bsr {
+            rows: self.cols,
+            cols: self.rows,
+            br: bc,
+            bc: br,
+            row_ptr,
+            col_idx,
+            values,
+        }
+    }
+
+    /// C = A B (block shapes must chain: `a.bc == b.br`), rows in parallel.
+    pub fn product(a: &Bsr, b: &Bsr) -> Bsr {
+        assert_eq!(a.bc, b.br, "block shapes do not chain");
+        assert_eq!(a.cols, b.rows, "matrix shapes do not chain");
+        let (br, bk, bc) = (a.br, a.bc, b.bc);
+        let bsz = br * bc;
+        let rows: Vec<(Vec<u32>, Vec<f64>)> = (0..a.rows)
+            .into_par_iter()
+            .map_init(
+                || (vec![u32::MAX; b.cols], Vec::<u32>::new(), Vec::<f64>::new()),
+                |(slot, cols, vals), i| {
+                    cols.clear();
+                    vals.clear();
+                    for ka in a.row_ptr[i]..a.row_ptr[i + 1] {
+                        let kk = a.col_idx[ka] as usize;
+                        let ab = &a.values[ka * br * bk..(ka + 1) * br * bk];
+                        for kb in b.row_ptr[kk]..b.row_ptr[kk + 1] {
+                            let j = b.col_idx[kb] as usize;
+                            let bb = &b.values[kb * bk * bc..(kb + 1) * bk * bc];
+                            if slot[j] == u32::MAX {
+                                slot[j] = cols.len() as u32;
+                                cols.push(j as u32);
+                                vals.extend(std::iter::repeat_n(0.0, bsz));
+                            }
+                            let s = slot[j] as usize;
+                            let out = &mut vals[s * bsz..(s + 1) * bsz];
+                            for r in 0..br {
+                                for m in 0..bk {
+                                    let arm = ab[r * bk + m];
+                                    if arm == 0.0 {
+                                        continue;
+                                    }
+                                    for c in 0..bc {
+                                        out[r * bc + c] += arm * bb[m * bc + c];
+                                    }
+                                }
+                            }
+                        }
+                    }
+                    for &j in cols.iter() {
+                        slot[j as usize] = u32::MAX;
+                    }
+                    // Sort the row's blocks by column.
+                    let mut order: Vec<usize> = (0..cols.len()).collect();
+                    order.sort_unstable_by_key(|&s| cols[s]);
+                    let sc: Vec<u32> = order.iter().map(|&s| cols[s]).collect();
+                    let mut sv = Vec::with_capacity(vals.len());
+                    for &s in &order {
+                        sv.extend_from_slice(&vals[s * bsz..(s + 1) * bsz]);
+                    }
+                    (sc, sv)
+                },
+            )
+            .collect();
+        let mut row_ptr = Vec::with_capacity(a.rows + 1);
+        row_ptr.push(0);
+        let total: usize = rows.iter().map(|r| r.0.len()).sum();
+        let mut col_idx = Vec::with_capacity(total);
+        let mut values = Vec::with_capacity(total * bsz);
+        for (c, v) in rows {
+            col_idx.extend_from_slice(&c);
+            values.extend_from_slice(&v);
+            row_ptr.push(col_idx.len());
+        }
+        Bsr {
+            rows: a.rows,
+            cols: b.cols,
+            br,
+            bc,
+            row_ptr,
+            col_idx,
+            values,
+        }
+    }
+}
+
+/// Set-up parameters of the multigrid hierarchy.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AmgParams {
+    /// Strength threshold θ (dimensionless): nodes i, j are strongly
+    /// connected when ‖A_ij‖_F ≥ θ·√(‖A_ii‖_F ‖A_jj‖_F).
+    pub strength: f64,
+    /// Chebyshev polynomial degree of each pre- and post-smoothing.
+    pub smoother_degree: usize,
+    /// Lower end of the Chebyshev interval as a fraction of λ_max.
+    pub smoother_range: f64,
+    /// The coarsest level has at most this many DOFs (solved by Cholesky).
+    pub coarse_dofs: usize,
+    /// At most this many levels.
+    pub max_levels: usize,
+}
+
+impl Default for AmgParams {
+    fn default() -> Self {
+        Self {
+            strength: 0.0,
+            smoother_degree: 2,
+            smoother_range: 1.0 / 30.0,
+            coarse_dofs: 3000,
+            max_levels: 10,
+        }
+    }
+}
+
+/// What went wrong in the set-up or a cycle.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum AmgError {
+    #[error("near-null space has {got} values, expected {expected} (6 per DOF)")]
+    NullSpace { got: usize, expected: usize },
+    #[error("matrix is not square with 3×3 blocks")]
+    Shape,
+    #[error("diagonal block of row {row} on level {level} is singular")]
+    SingularDiagonal { level: usize, row: usize },
+    #[error("coarsest level: {0}")]
+    Coarse(#[from] LinearError),
+    #[error("conjugate gradients did not reach relative residual {tolerance:e} in {iterations} iterations (reached {reached:e})")]
+    NotConverged {
+        iterations: usize,
+        tolerance: f64,
+        reached: f64,
+    },
+    #[error("non-finite value in conjugate gradients (iteration {iteration})")]
+    NonFinite { iteration: usize },
+}
+
+struct Level {
+    a: Bsr,
+    /// Inverse diagonal blocks.
+    dinv: Vec<f64>,
+    /// Chebyshev interval of D⁻¹A.
+    lo: f64,
+    hi: f64,
+    p: Bsr,
+    r: Bsr,
+}
+
+/// A smoothed-aggregation hierarchy.
+pub struct Amg {
+    levels: Vec<Level>,
+    single: Option<Bsr>,
+    coarse: Cholesky,
+    coarse_n: usize,
+    params: AmgParams,
+}
+
+/// Summary of a hierarchy.
+#[derive(Debug, Clone, PartialEq)]
+pub struct AmgInfo {
+    /// DOFs per level, finest first (the coarsest is the Cholesky level).
+    pub level_dofs: Vec<usize>,
+    /// Σ entries of all level matrices / entries of the finest.
+    pub operator_complexity: f64,
+}
+
+fn invert_small(m: &mut [f64], n: usize) -> bool {
+    // Gauss–Jordan with partial pivoting on an n×n row-major block.
+    let mut inv = vec![0.0; n * n];
+    for i in 0..n {
+        inv[i * n + i] = 1.0;
+    }
+    let scale = m.iter().fold(0.0f64, |s, v| s.max(v.abs()));
+    if !(scale > 0.0 && scale.is_finite()) {
+        return false;
+    }
+    for c in 0..n {
+        let p = (c..n)
+            .max_by(|&a, &b| m[a * n + c].abs().total_cmp(&m[b * n + c].abs()))
+            .unwrap_or(c);
+        if m[p * n + c].abs() <= 1e-14 * scale {
+            return false;
+        }
+        if p != c {
+            for k in 0..n {
+                m.swap(p * n + k, c * n + k);
+                inv.swap(p * n + k, c * n + k);
+            }
+        }
+        let d = 1.0 / m[c * n + c];
+        for k in 0..n {
+            m[c * n + k] *= d;
+            inv[c * n + k] *= d;
+        }
+        for r in 0..n {
+            if r != c {
+                let f = m[r * n + c];
+                if f != 0.0 {
+                    for k in 0..n {
+                        m[r * n + k] -= f * m[c * n + k];
+                        inv[r * n + k] -= f * inv[c * n + k];
+                    }
+                }
+            }
+        }
+    }
+    m.copy_from_slice(&inv);
+    true
+}
+
+fn block_diag_inverse(a: &Bsr, level: usize) -> Result<Vec<f64>, AmgError> {
+    let b = a.br;
+    let mut out = vec![0.0; a.rows * b * b];
+    out.par_chunks_mut(b * b)
+        .enumerate()
+        .try_for_each(|(i, blk)| {
+            let k = a
+                .find(i, i)
+                .ok_or(AmgError::SingularDiagonal { level, row: i })?;
+            blk.copy_from_slice(&a.values[k * b * b..(k + 1) * b * b]);
+            if invert_small(blk, b) {
+                Ok(())
+            } else {
+                Err(AmgError::SingularDiagonal { level, row: i })
+            }
+        })?;
+    Ok(out)
+}
+
+fn apply_dinv(dinv: &[f64], b: usize, r: &[f64], z: &mut [f64]) {
+    z.par_chunks_mut(b)
+        .zip(r.par_chunks(b))
+        .zip(dinv.par_chunks(b * b))
+        .for_each(|((zi, ri), d)| {
+            for (row, zr) in zi.iter_mut().enumerate() {
+                let mut s = 0.0;
+                for c in 0..b {
+                    s += d[row * b + c] * ri[c];
+                }
+                *zr = s;
+            }
+        });
+}
+
+fn pdot(a: &[f64], b: &[f64]) -> f64 {
+    a.par_chunks(4096)
+        .zip(b.par_chunks(4096))
+        .map(|(x, y)| x.iter().zip(y).map(|(p, q)| p * q).sum::<f64>())
+        .sum()
+}
+
+/// Largest eigenvalue of D⁻¹A by power iteration (a few steps: the
+/// Chebyshev interval and ω only need it to ~10 %, then it is enlarged).
+fn lambda_max(a: &Bsr, dinv: &[f64]) -> f64 {
+    let n = a.rows * a.br;
+    let mut x: Vec<f64> = (0..n)
+        .map(|i| 1.0 + ((i * 7919) % 101) as f64 / 101.0)
+        .collect();
+    let mut y = vec![0.0; n];
+    let mut z = vec![0.0; n];
+    let mut lam = 1.0;
+    for _ in 0..15 {
+        let nx = pdot(&x, &x).sqrt();
+        x.par_iter_mut().for_each(|v| *v /= nx);
+        a.mul(&x, &mut y);
+        apply_dinv(dinv, a.br, &y, &mut z);
+        // Rayleigh quotient in the A-inner product: (x, A D⁻¹A x)/(x, A x)
+        // is the symmetric form of D⁻¹A's eigenproblem.
+        let xax = pdot(&x, &y);
+        let zaz = pdot(&y, &z);
+        if xax > 0.0 {
+            lam = zaz / xax;
+        }
+        std::mem::swap(&mut x, &mut z);
+    }
+    lam
+}
+
+/// Greedy aggregation of the block rows of `a`: `agg[i]` is the aggregate
+/// of node i or `u32::MAX` for an isolated node (no strong neighbour:
+/// fully constrained), which the prolongator leaves out.
+fn aggregate(a: &Bsr, theta: f64) -> (Vec<u32>, usize) {
+    let n = a.rows;
+    let bsz = a.br * a.bc;
+    let fro = |k: usize| {
+        a.values[k * bsz..(k + 1) * bsz]
+            .iter()
+            .map(|v| v * v)
+            .sum::<f64>()
+            .sqrt()
+    };
+    let diag: Vec<f64> = (0..n)
+        .map(|i| a.find(i, i).map(fro).unwrap_or(0.0))
+        .collect();
+    let strong: Vec<Vec<u32>> = (0..n)
+        .into_par_iter()
+        .map(|i| {
+            (a.row_ptr[i]..a.row_ptr[i + 1])
+                .filter(|&k| {
+                    let j = a.col_idx[k] as usize;
+                    j != i && {
+                        let f = fro(k);
+                        f > 0.0 && f >= theta * (diag[i] * diag[j]).sqrt()
+                    }
+                })
+                .map(|k| a.col_idx[k])
+                .collect()
+        })
+        .collect();
+    const NONE: u32 = u32::MAX;
+    let mut agg = vec![NONE; n];
+    let mut count = 0u32;
+    // Pass 1: a node whose strong neighbours are all free seeds an aggregate.
+    for i in 0..n {
+        if agg[i] != NONE || strong[i].is_empty() {
+            continue;
+        }
+        if strong[i].iter().all(|&j| agg[j as usize] == NONE) {
+            agg[i] = count;
+            for &j in &strong[i] {
+                agg[j as usize] = count;
+            }
+            count += 1;
+        }
+    }
+    // Pass 2: join the neighbouring aggregate of strongest connection.
+    let pass1 = agg.clone();
+    for i in 0..n {
+        if agg[i] != NONE || strong[i].is_empty() {
+            continue;
+        }
+        let mut best = (0.0, NONE);
+        for k in a.row_ptr[i]..a.row_ptr[i + 1] {
+            let j = a.col_idx[k] as usize;
+            if j != i && pass1[j] != NONE {
+                let f = fro(k);
+                if f > best.0 {
+                    best = (f, pass1[j]);
+                }
+            }
+        }
+        agg[i] = best.1;
+    }
+    // Pass 3: what is left forms aggregates with its free neighbours.
+    for i in 0..n {
+        if agg[i] != NONE || strong[i].is_empty() {
+            continue;
+        }
+        agg[i] = count;
+        for &j in &strong[i] {
+            if agg[j as usize] == NONE {
+                agg[j as usize] = count;
+            }
+        }
+        count += 1;
+    }
+    (agg, count as usize)
+}
+
+/// Tentative prolongator (br = block size of `a`, bc = 6) and the coarse
+/// near-null space (6 per coarse DOF), by a QR of each aggregate's rows of
+/// `null` (6 values per fine DOF).
+fn tentative(agg: &[u32], n_agg: usize, b: usize, null: &[f64]) -> (Bsr, Vec<f64>) {
+    const K: usize = 6;
+    let n = agg.len();
+    let mut members: Vec<Vec<usize>> = vec![Vec::new(); n_agg];
+    for (i, &g) in agg.iter().enumerate() {
+        if g != u32::MAX {
+            members[g as usize].push(i);
+        }
+    }
+    // Per aggregate: Q (|members|·b × 6) and R (6×6).
+    let qr: Vec<(Vec<f64>, [f64; K * K])> = members
+        .par_iter()
+        .map(|mem| {
+            let m = mem.len() * b;
+            let mut q = vec![0.0; m * K];
+            for (li, &i) in mem.iter().enumerate() {
+                for c in 0..b {
+                    let row = li * b + c;
+                    q[row * K..(row + 1) * K]
+                        .copy_from_slice(&null[(i * b + c) * K..(i * b + c + 1) * K]);
+                }
+            }
+            let mut r = [0.0; K * K];
+            // Modified Gram–Schmidt, column by column; a column left with
+            // less than 1e-10 of its norm is dependent and set to zero.
+            for j in 0..K {
+                let orig: f64 = (0..m).map(|row| q[row * K + j].powi(2)).sum::<f64>().sqrt();
+                for p in 0..j {
+                    let d: f64 = (0..m).map(|row| q[row * K + p] * q[row * K + j]).sum();
+                    r[p * K + j] = d;
+                    for row in 0..m {
+                        q[row * K + j] -= d * q[row * K + p];
+                    }
+                }
+                let nrm: f64 = (0..m).map(|row| q[row * K + j].powi(2)).sum::<f64>().sqrt();
+                if nrm > 1e-10 * orig && nrm > 0.0 {
+                    r[j * K + j] = nrm;
+                    for row in 0..m {
+                        q[row * K + j] /= nrm;
+                    }
+                } else {
+                    for row in 0..m {
+                        q[row * K + j] = 0.0;
+                    }
+                }
+            }
+            (q, r)
+        })
+        .collect();
+    let mut row_ptr = Vec::with_capacity(n + 1);
+    row_ptr.push(0);
+    let mut col_idx = Vec::new();
+    let mut values = vec![0.0; 0];
+    let mut local = vec![0usize; n];
+    for mem in &members {
+        for (li, &i) in mem.iter().enumerate() {
+            local[i] = li;
+        }
+    }
+    for i in 0..n {
+        let g = agg[i];
+        if g != u32::MAX {
+            col_idx.push(g);
+            let (q, _) = &qr[g as usize];
+            let li = local[i];
+            values.extend_from_slice(&q[li * b * K..(li + 1) * b * K]);
+        }
+        row_ptr.push(col_idx.len());
+    }
+    let mut coarse_null = vec![0.0; n_agg * K * K];
+    for (g, (_, r)) in qr.iter().enumerate() {
+        coarse_null[g * K * K..(g + 1) * K * K].copy_from_slice(r);
+    }
+    (
+        Bsr {
+            rows: n,
+            cols: n_agg,
+            br: b,
+            bc: K,
+            row_ptr,
+            col_idx,
+            values,
+        },
+        coarse_null,
+    )
+}
+
+/// P = T − ω D⁻¹ (A T), row by row.
+fn smooth_prolongator(a: &Bsr, dinv: &[f64], t: &Bsr, omega: f64) -> Bsr {
+    let at = Bsr::product(a, t);
+    let (b, k) = (t.br, t.bc);
+    let bsz = b * k;
+    // Rows are independent: P_i = T_i − ω D_i⁻¹ (AT)_i; T_i's block is in
+    // AT's row pattern (A_ii T_i contributes to it) unless A_ii T_i = 0.
+    let rows: Vec<(Vec<u32>, Vec<f64>)> = (0..at.rows)
+        .into_par_iter()
+        .map(|i| {
+            let d = &dinv[i * b * b..(i + 1) * b * b];
+            let mut cols: Vec<u32> = at.col_idx[at.row_ptr[i]..at.row_ptr[i + 1]].to_vec();
+            let mut vals = Vec::with_capacity(cols.len() * bsz);
+            for kk in at.row_ptr[i]..at.row_ptr[i + 1] {
+                let blk = &at.values[kk * bsz..(kk + 1) * bsz];
+                for r in 0..b {
+                    for c in 0..k {
+                        let mut s = 0.0;
+                        for m in 0..b {
+                            s += d[r * b + m] * blk[m * k + c];
+                        }
+                        vals.push(-omega * s);
+                    }
+                }
+            }
+            for kt in t.row_ptr[i]..t.row_ptr[i + 1] {
+                let g = t.col_idx[kt];
+                let tb = &t.values[kt * bsz..(kt + 1) * bsz];
+                match cols.binary_search(&g) {
+                    Ok(s) => {
+                        for (v, x) in vals[s * bsz..(s + 1) * bsz].iter_mut().zip(tb) {
+                            *v += x;
+                        }
+                    }
+                    Err(s) => {
+                        cols.insert(s, g);
+                        let tail = vals.split_off(s * bsz);
+                        vals.extend_from_slice(tb);
+                        vals.extend_from_slice(&tail);
+                    }
+                }
+            }
+            (cols, vals)
+        })
+        .collect();
+    let mut row_ptr = vec![0];
+    let mut col_idx = Vec::new();
+    let mut vals = Vec::new();
+    for (c, v) in rows {
+        col_idx.extend_from_slice(&c);
+        vals.extend_from_slice(&v);
+        row_ptr.push(col_idx.len());
+    }
+    Bsr {
+        rows: t.rows,
+        cols: t.cols,
+        br: b,
+        bc: k,
+        row_ptr,
+        col_idx,
+        values: vals,
+    }
+}
+
+/// Lower triangle (CSC) of a square Bsr and the node of each DOF.
+fn to_lower_csc(a: &Bsr) -> (Vec<usize>, Vec<usize>, Vec<f64>, Vec<usize>) {
+    let b = a.br;
+    let n = a.rows * b;
+    let mut col_ptr = Vec::with_capacity(n + 1);
+    let mut row_idx = Vec::new();
+    let mut values = Vec::new();
+    col_ptr.push(0);
+    // Symmetric: column j's lower part equals row j's entries with i ≥ j.
+    for bj in 0..a.rows {
+        for cj in 0..b {
+            let j = bj * b + cj;
+            for k in a.row_ptr[bj]..a.row_ptr[bj + 1] {
+                let bi = a.col_idx[k] as usize;
+                for ci in 0..b {
+                    let i = bi * b + ci;
+                    if i >= j {
+                        // Row j, column i of A = A_ij by symmetry.
+                        row_idx.push(i);
+                        values.push(a.values[k * b * b + cj * b + ci]);
+                    }
+                }
+            }
+            col_ptr.push(row_idx.len());
+        }
+    }
+    (col_ptr, row_idx, values, (0..n).map(|i| i / b).collect())
+}
+
+impl Amg {
+    /// Builds the hierarchy for the symmetric positive definite `a` (3×3
+    /// blocks, both triangles) with the near-null space `null` (6 values per
+    /// DOF, row-major: DOF i's row is `null[6i..6i+6]`).
+    pub fn new(a: Bsr, null: &[f64], params: AmgParams) -> Result<Self, AmgError> {
+        if a.br != 3 || a.bc != 3 || a.rows != a.cols {
+            return Err(AmgError::Shape);
+        }
+        let expected = 6 * a.rows * 3;
+        if null.len() != expected {
+            return Err(AmgError::NullSpace {
+                got: null.len(),
+                expected,
+            });
+        }
+        let mut levels = Vec::new();
+        let mut a = a;
+        let mut null = null.to_vec();
+        loop {
+            let level = levels.len();
+            let n = a.rows * a.br;
+            if n <= params.coarse_dofs || level + 1 >= params.max_levels {
+                break;
+            }
+            let dinv = block_diag_inverse(&a, level)?;
+            let lam = lambda_max(&a, &dinv);
+            let (agg, n_agg) = aggregate(&a, params.strength);
+            if n_agg == 0 || 6 * n_agg >= n {
+                break;
+            }
+            let (t, coarse_null) = tentative(&agg, n_agg, a.br, &null);
+            let omega = 4.0 / (3.0 * lam);
+            let p = smooth_prolongator(&a, &dinv, &t, omega);
+            drop(t);
+            let r = p.transpose();
+            let ap = Bsr::product(&a, &p);
+            let mut ac = Bsr::product(&r, &ap);
+            drop(ap);
+            // Zero columns of P (dependent near-null-space columns) leave
+            // zero rows in A_c: make them identity rows.
+            for i in 0..ac.rows {
+                let k = match ac.find(i, i) {
+                    Some(k) => k,
+                    None => continue,
+                };
+                for c in 0..6 {
+                    let d = k * 36 + c * 6 + c;
+                    if ac.values[d] == 0.0 {
+                        ac.values[d] = 1.0;
+                    }
+                }
+            }
+            let hi = 1.1 * lam;
+            levels.push(Level {
+                a,
+                dinv,
+                lo: hi * params.smoother_range,
+                hi,
+                p,
+                r,
+            });
+            a = ac;
+            null = coarse_null;
+        }
+        let (cp, ri, v, dn) = to_lower_csc(&a);
+        let mut coarse = Cholesky::new(&cp, &ri, Ordering::Metis, &dn)?;
+        coarse.factorize(&v)?;
+        let coarse_n = a.rows * a.br;
+        // With one level the matrix is kept for the Krylov products.
+        let single = levels.is_empty().then_some(a);
+        Ok(Self {
+            levels,
+            single,
+            coarse,
+            coarse_n,
+            params,
+        })
+    }
+
+    /// Level sizes and operator complexity.
+    pub fn info(&self) -> AmgInfo {
+        let mut level_dofs: Vec<usize> = self.levels.iter().map(|l| l.a.rows * l.a.br).collect();
+        level_dofs.push(self.coarse_n);
+        let fine = self.levels.first().map(|l| l.a.entries()).unwrap_or(1) as f64;
+        let total: usize = self.levels.iter().map(|l| l.a.entries()).sum();
+        AmgInfo {
+            level_dofs,
+            operator_complexity: total as f64 / fine,
+        }
+    }
+
+    fn chebyshev(&self, l: usize, b: &[f64], x: &mut [f64], zero_start: bool, ws: &mut Work) {
+        let lev = &self.levels[l];
+        let (r, d, z, ad) = (&mut ws.r[l], &mut ws.d[l], &mut ws.z[l], &mut ws.ad[l]);
+        let theta = 0.5 * (lev.hi + lev.lo);
+        let delta = 0.5 * (lev.hi - lev.lo);
+        let sigma = theta / delta;
+        let mut rho = 1.0 / sigma;
+        if zero_start {
+            r.copy_from_slice(b);
+            x.par_iter_mut().for_each(|v| *v = 0.0);
+        } else {
+            lev.a.mul(x, ad);
+            r.par_iter_mut()
+                .zip(b.par_iter().zip(ad.par_iter()))
+                .for_each(|(ri, (bi, ai))| *ri = bi - ai);
+        }
+        apply_dinv(&lev.dinv, lev.a.br, r, z);
+        d.par_iter_mut()
+            .zip(z.par_iter())
+            .for_each(|(di, zi)| *di = zi / theta);
+        let deg = self.params.smoother_degree.max(1);
+        for k in 0..deg {
+            x.par_iter_mut()
+                .zip(d.par_iter())
+                .for_each(|(xi, di)| *xi += di);
+            if k + 1 == deg {
+                break;
+            }
+            lev.a.mul(d, ad);
+            r.par_iter_mut()
+                .zip(ad.par_iter())
+                .for_each(|(ri, ai)| *ri -= ai);
+            apply_dinv(&lev.dinv, lev.a.br, r, z);
+            let rho_new = 1.0 / (2.0 * sigma - rho);
+            let (c1, c2) = (rho_new * rho, 2.0 * rho_new / delta);
+            d.par_iter_mut()
+                .zip(z.par_iter())
+                .for_each(|(di, zi)| *di = c1 * *di + c2 * zi);
+            rho = rho_new;
+        }
+    }
+
+    fn cycle(&self, l: usize, b: &[f64], x: &mut [f64], ws: &mut Work) -> Result<(), AmgError> {
+        if l == self.levels.len() {
+            x.copy_from_slice(b);
+            self.coarse.solve_in_place(x)?;
+            return Ok(());
+        }
+        let lev = &self.levels[l];
+        self.chebyshev(l, b, x, true, ws);
+        {
+            let (res, ad) = (&mut ws.res[l], &mut ws.ad[l]);
+            lev.a.mul(x, ad);
+            res.par_iter_mut()
+                .zip(b.par_iter().zip(ad.par_iter()))
+                .for_each(|(ri, (bi, ai))| *ri = bi - ai);
+        }
+        let mut bc = std::mem::take(&mut ws.bc[l]);
+        let mut xc = std::mem::take(&mut ws.xc[l]);
+        lev.r.mul(&ws.res[l], &mut bc);
+        self.cycle(l + 1, &bc, &mut xc, ws)?;
+        {
+            let corr = &mut ws.ad[l];
+            lev.p.mul(&xc, corr);
+            x.par_iter_mut()
+                .zip(corr.par_iter())
+                .for_each(|(xi, ci)| *xi += ci);
+        }
+        ws.bc[l] = bc;
+        ws.xc[l] = xc;
+        self.chebyshev(l, b, x, false, ws);
+        Ok(())
+    }
+
+    /// The finest-level matrix (the system matrix).
+    pub fn matrix(&self) -> &Bsr {
+        match (&self.single, self.levels.first()) {
+            (Some(a), _) => a,
+            (None, Some(l)) => &l.a,
+            (None, None) => unreachable!("a hierarchy has at least one matrix"),
+        }
+    }
+
+    /// Work vectors for [`Amg::apply`].
+    pub fn workspace(&self) -> Work {
+        let sizes: Vec<usize> = self.levels.iter().map(|l| l.a.rows * l.a.br).collect();
+        let coarse: Vec<usize> = sizes
+            .iter()
+            .skip(1)
+            .copied()
+            .chain(std::iter::once(self.coarse_n))
+            .collect();
+        let v = |s: &[usize]| s.iter().map(|&n| vec![0.0; n]).collect::<Vec<_>>();
+        Work {
+            r: v(&sizes),
+            d: v(&sizes),
+            z: v(&sizes),
+            ad: v(&sizes),
+            res: v(&sizes),
+            bc: v(&coarse),
+            xc: v(&coarse),
+        }
+    }
+
+    /// One V-cycle: z ≈ A⁻¹ r.
+    pub fn apply(&self, r: &[f64], z: &mut [f64], ws: &mut Work) -> Result<(), AmgError> {
+        self.cycle(0, r, z, ws)
+    }
+}
+
+/// Work vectors of the V-cycle, one set per level.
+pub struct Work {
+    r: Vec<Vec<f64>>,
+    d: Vec<Vec<f64>>,
+    z: Vec<Vec<f64>>,
+    ad: Vec<Vec<f64>>,
+    res: Vec<Vec<f64>>,
+    bc: Vec<Vec<f64>>,
+    xc: Vec<Vec<f64>>,
+}
+
+/// Result of [`amg_pcg`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CgInfo {
+    pub iterations: usize,
+    /// Final ‖b − A x‖ / ‖b‖ (recursively updated residual).
+    pub relative_residual: f64,
+}
+
+/// Conjugate gradients on the hierarchy's finest matrix preconditioned by
+/// one V-cycle per iteration, from x = 0, until ‖r‖ ≤ `tolerance`·‖b‖.
+pub fn amg_pcg(
+    amg: &Amg,
+    b: &[f64],
+    x: &mut [f64],
+    tolerance: f64,
+    max_iterations: usize,
+) -> Result<CgInfo, AmgError> {
+    let a = amg.matrix();
+    let n = b.len();
+    x.par_iter_mut().for_each(|v| *v = 0.0);
+    let bnorm = pdot(b, b).sqrt();
+    if bnorm == 0.0 {
+        return Ok(CgInfo {
+            iterations: 0,
+            relative_residual: 0.0,
+        });
+    }
+    let mut ws = amg.workspace();
+    let mut r = b.to_vec();
+    let mut z = vec![0.0; n];
+    amg.apply(&r, &mut z, &mut ws)?;
+    let mut p = z.clone();
+    let mut rz = pdot(&r, &z);
+    let mut ap = vec![0.0; n];
+    let mut rel = 1.0;
+    for it in 1..=max_iterations {
+        a.mul(&p, &mut ap);
+        let pap = pdot(&p, &ap);
+        if !(pap.is_finite() && pap > 0.0) {
+            return Err(AmgError::NonFinite { iteration: it });
+        }
+        let alpha = rz / pap;
+        x.par_iter_mut()
+            .zip(p.par_iter())
+            .for_each(|(xi, pi)| *xi += alpha * pi);
+        r.par_iter_mut()
+            .zip(ap.par_iter())
+            .for_each(|(ri, ai)| *ri -= alpha * ai);
+        rel = pdot(&r, &r).sqrt() / bnorm;
+        if !rel.is_finite() {
+            return Err(AmgError::NonFinite { iteration: it });
+        }
+        if rel <= tolerance {
+            return Ok(CgInfo {
+                iterations: it,
+                relative_residual: rel,
+            });
+        }
+        amg.apply(&r, &mut z, &mut ws)?;
+        let rz_new = pdot(&r, &z);
+        let beta = rz_new / rz;
+        rz = rz_new;
+        p.par_iter_mut()
+            .zip(z.par_iter())
+            .for_each(|(pi, zi)| *pi = zi + beta * *pi);
+    }
+    Err(AmgError::NotConverged {
+        iterations: max_iterations,
+        tolerance,
+        reached: rel,
+    })
+}
