@@ -219,7 +219,7 @@ impl Default for SolverSettings {
             ordering: Ordering::Metis,
             pcg_tolerance: 1e-8,
             pcg_max_iterations: 20,
-            krylov_tolerance: 1e-6,
+            krylov_tolerance: 1e-3,
             krylov_max_iterations: 40,
         }
     }
