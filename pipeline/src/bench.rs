@@ -127,7 +127,11 @@ struct Measured {
 
 /// Waits for `child` (at most `timeout` s, then kills it) and measures it
 /// with wait4's rusage: the peak resident set of that process alone.
-fn wait_measured(child: &mut std::process::Child, start: Instant, timeout: f64) -> Result<Measured> {
+fn wait_measured(
+    child: &mut std::process::Child,
+    start: Instant,
+    timeout: f64,
+) -> Result<Measured> {
     let pid = child.id() as libc::pid_t;
     let mut status: libc::c_int = 0;
     // SAFETY: rusage is plain data; wait4 writes it and the status.
@@ -241,11 +245,7 @@ fn smooth80_spec() -> PathBuf {
 }
 
 /// Meshes the smooth-80 variant and returns (scene, model path).
-fn mesh_variant(
-    args: &BenchArgs,
-    symmetry: &str,
-    printer: &Printer,
-) -> Result<(Scene, PathBuf)> {
+fn mesh_variant(args: &BenchArgs, symmetry: &str, printer: &Printer) -> Result<(Scene, PathBuf)> {
     let mut overrides = args.overrides.clone();
     overrides.push(format!("specimen.symmetry={symmetry}"));
     overrides.push(format!("name=bench-linear-{symmetry}"));
@@ -263,7 +263,11 @@ fn linear(args: &BenchArgs, printer: &Printer) -> Result<ExitCode> {
         let (scene, model_path) = mesh_variant(args, symmetry, printer)?;
         let (concrete, steel) = elastic_materials(&scene);
         let h = scene.mesh.h_interface;
-        let label = if symmetry == "full" { "full" } else { "quarter" };
+        let label = if symmetry == "full" {
+            "full"
+        } else {
+            "quarter"
+        };
         let solvers: &[SolverKind] = if symmetry == "full" {
             &[SolverKind::Cholesky, SolverKind::AmgCg]
         } else {
@@ -335,7 +339,9 @@ fn linear(args: &BenchArgs, printer: &Printer) -> Result<ExitCode> {
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("creating {}", args.out.display()))?;
     let path = args.out.join("linear.md");
-    let tmp = args.out.join(format!(".linear.md.tmp-{}", std::process::id()));
+    let tmp = args
+        .out
+        .join(format!(".linear.md.tmp-{}", std::process::id()));
     std::fs::write(&tmp, &table).with_context(|| format!("writing {}", tmp.display()))?;
     std::fs::rename(&tmp, &path).with_context(|| format!("writing {}", path.display()))?;
     printer.finish();
@@ -347,7 +353,12 @@ fn linear(args: &BenchArgs, printer: &Printer) -> Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
-fn linear_table(rows: &[Row], ccx_force: Option<f64>, notes: &[String], args: &BenchArgs) -> String {
+fn linear_table(
+    rows: &[Row],
+    ccx_force: Option<f64>,
+    notes: &[String],
+    args: &BenchArgs,
+) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,
@@ -382,7 +393,9 @@ fn linear_table(rows: &[Row], ccx_force: Option<f64>, notes: &[String], args: &B
             r.threads,
             r.wall,
             r.max_rss as f64 / 1048576.0,
-            r.iterations.map(|i| i.to_string()).unwrap_or_else(|| "–".into()),
+            r.iterations
+                .map(|i| i.to_string())
+                .unwrap_or_else(|| "–".into()),
             r.reaction,
             diff
         );
@@ -431,7 +444,10 @@ mod ccx {
         for (i, x) in p.nodes.iter().enumerate() {
             let _ = writeln!(s, "{}, {:.12e}, {:.12e}, {:.12e}", i + 1, x[0], x[1], x[2]);
         }
-        for (name, region) in [("ESTEEL", mesh::Region::Steel), ("ECONCRETE", mesh::Region::Concrete)] {
+        for (name, region) in [
+            ("ESTEEL", mesh::Region::Steel),
+            ("ECONCRETE", mesh::Region::Concrete),
+        ] {
             let _ = writeln!(s, "*ELEMENT, TYPE=C3D4, ELSET={name}");
             for (e, t) in p.tets.iter().enumerate() {
                 if p.tet_region[e] == region {
@@ -479,7 +495,11 @@ mod ccx {
                 let values = lines[i + 1..]
                     .iter()
                     .find(|l| !l.trim().is_empty())
-                    .map(|l| l.split_whitespace().filter_map(|v| v.parse::<f64>().ok()).collect::<Vec<_>>());
+                    .map(|l| {
+                        l.split_whitespace()
+                            .filter_map(|v| v.parse::<f64>().ok())
+                            .collect::<Vec<_>>()
+                    });
                 if let Some(v) = values.filter(|v| v.len() >= 3) {
                     found = Some(v[2]);
                 }
@@ -526,9 +546,15 @@ mod ccx {
                     .map(|w| w.trim_end_matches('.').to_string())
             })
             .unwrap_or_default();
-        let threads = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1);
+        let threads = std::thread::available_parallelism()
+            .map(|n| n.get())
+            .unwrap_or(1);
         let log = std::fs::File::create(dir.join("ccx.log")).context("creating ccx.log")?;
-        printer.line(&format!("CalculiX: {} nodes, {} tets", p.nodes.len(), p.tets.len()));
+        printer.line(&format!(
+            "CalculiX: {} nodes, {} tets",
+            p.nodes.len(),
+            p.tets.len()
+        ));
         let start = Instant::now();
         let mut child = Command::new(&exe)
             .arg(JOB)
@@ -549,7 +575,8 @@ mod ccx {
                 dir.join("ccx.log").display()
             );
         }
-        let text = std::fs::read_to_string(&dat).with_context(|| format!("reading {}", dat.display()))?;
+        let text =
+            std::fs::read_to_string(&dat).with_context(|| format!("reading {}", dat.display()))?;
         let reaction = parse_total_fz(&text)
             .with_context(|| format!("{}: no total force for set NLOADED", dat.display()))?;
         printer.line(&format!(

@@ -1,0 +1,81 @@
+//! `ribbar bench linear` end to end on a coarse mesh, with real gmsh and,
+//! when installed, real CalculiX.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+
+fn repo() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .unwrap()
+        .to_path_buf()
+}
+
+fn ccx_installed() -> bool {
+    std::env::var_os("PATH")
+        .map(|p| std::env::split_paths(&p).any(|d| d.join("ccx").is_file()))
+        .unwrap_or(false)
+}
+
+/// Issue 7: the perfect-bond benchmark writes its table with every ribbar
+/// solver, and when `ccx` is installed the reaction forces agree with
+/// CalculiX's within 0.5 %.
+#[test]
+fn bench_linear_table_and_agreement_with_calculix() {
+    let tmp = std::env::temp_dir().join(format!("ribbar-bench-linear-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&tmp);
+    let (work, out) = (tmp.join("work"), tmp.join("out"));
+    let o = Command::new(env!("CARGO_BIN_EXE_ribbar"))
+        .args([
+            "bench",
+            "linear",
+            "--set",
+            "mesh.h_interface=3 mm",
+            "--set",
+            "mesh.h_outer=8 mm",
+        ])
+        .arg("--work")
+        .arg(&work)
+        .arg("--out")
+        .arg(&out)
+        .current_dir(repo())
+        .stdin(Stdio::null())
+        .output()
+        .expect("ribbar runs");
+    let log = format!(
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(o.status.success(), "bench failed:\n{log}");
+    let table = std::fs::read_to_string(out.join("linear.md")).expect("linear.md written");
+    let rows: Vec<Vec<&str>> = table
+        .lines()
+        .filter(|l| l.starts_with("| full") || l.starts_with("| quarter"))
+        .map(|l| l.split('|').map(str::trim).collect())
+        .collect();
+    let solvers: Vec<&str> = rows.iter().map(|r| r[4]).collect();
+    assert!(solvers.iter().any(|s| s.contains("Cholesky")), "{table}");
+    assert!(solvers.iter().any(|s| s.contains("AMG")), "{table}");
+    assert!(rows.iter().any(|r| r[1] == "quarter"), "{table}");
+    let force = |r: &Vec<&str>| r[9].parse::<f64>().unwrap();
+    for r in &rows {
+        assert!(force(r) > 0.0, "reaction of {r:?}");
+    }
+    let full: Vec<&Vec<&str>> = rows.iter().filter(|r| r[1] == "full").collect();
+    if ccx_installed() {
+        let ccx = full
+            .iter()
+            .find(|r| r[4].contains("CalculiX"))
+            .expect("a CalculiX row");
+        for r in full.iter().filter(|r| r[4].starts_with("ribbar")) {
+            let rel = (force(r) - force(ccx)).abs() / force(ccx);
+            assert!(rel < 5e-3, "{} vs ccx: {rel:e}\n{table}", r[4]);
+            let printed: f64 = r[10].parse().unwrap();
+            assert!(printed.abs() < 5e-3, "printed difference {r:?}");
+        }
+    } else {
+        assert!(table.contains("not installed"), "{table}");
+    }
+    let _ = std::fs::remove_dir_all(&tmp);
+}
