@@ -14,7 +14,13 @@ pub fn run_scene(scene: &Scene, work: &Path, stages: &[&str], printer: &Printer)
     let gmsh = geom::gmsh::Gmsh::locate()?;
     let keys = Keys::of(scene, gmsh.version());
     let store = Store::new(work);
-    let ctx = Ctx { store: &store, scene, keys: &keys, gmsh: &gmsh, printer };
+    let ctx = Ctx {
+        store: &store,
+        scene,
+        keys: &keys,
+        gmsh: &gmsh,
+        printer,
+    };
     for stage in stages {
         ctx.ensure(stage)?;
     }
@@ -62,7 +68,9 @@ pub fn clean(args: &CleanArgs, printer: &Printer) -> Result<ExitCode> {
             printer.line(&format!("removed {}", dir.display()));
         }
     } else if args.spec.is_none() {
-        anyhow::bail!("clean: give a SPEC (its results are removed) and/or --all (the whole store)");
+        anyhow::bail!(
+            "clean: give a SPEC (its results are removed) and/or --all (the whole store)"
+        );
     }
     Ok(ExitCode::SUCCESS)
 }

@@ -70,12 +70,18 @@ fn status(args: &SceneArgs) -> Result<ExitCode> {
             StageStatus::UpToDate => "up to date".to_string(),
             StageStatus::Missing => "missing".to_string(),
             StageStatus::Interrupted => "interrupted: `ribbar run` resumes it".to_string(),
-            StageStatus::Stale(changed) if changed.is_empty() => "stale (upstream changed)".to_string(),
+            StageStatus::Stale(changed) if changed.is_empty() => {
+                "stale (upstream changed)".to_string()
+            }
             StageStatus::Stale(changed) => format!(
                 "stale: changed {}",
                 changed
                     .iter()
-                    .map(|k| if STAGES.contains(&k.as_str()) { format!("{k} (upstream stage)") } else { k.clone() })
+                    .map(|k| if STAGES.contains(&k.as_str()) {
+                        format!("{k} (upstream stage)")
+                    } else {
+                        k.clone()
+                    })
                     .collect::<Vec<_>>()
                     .join(", ")
             ),

@@ -96,7 +96,10 @@ impl RawOutputs {
                 bound: "must be in (0, 1]",
             });
         }
-        let mut plots = self.plots.clone().unwrap_or(vec![PlotFormat::Png, PlotFormat::Svg]);
+        let mut plots = self
+            .plots
+            .clone()
+            .unwrap_or(vec![PlotFormat::Png, PlotFormat::Svg]);
         plots.dedup();
         Ok(Outputs {
             fields: FieldRequest {
@@ -104,7 +107,11 @@ impl RawOutputs {
                 at_peak: fields.at_peak.unwrap_or(true),
                 at_end: fields.at_end.unwrap_or(true),
             },
-            post: PostRequest { energy_fed_limit, residual_fraction, plots },
+            post: PostRequest {
+                energy_fed_limit,
+                residual_fraction,
+                plots,
+            },
         })
     }
 }

@@ -42,7 +42,11 @@ impl Override {
         let (key, raw_value) = arg
             .split_once('=')
             .ok_or_else(|| OverrideError::NoEquals(arg.to_string()))?;
-        let path: Vec<String> = key.trim().split('.').map(|s| s.trim().to_string()).collect();
+        let path: Vec<String> = key
+            .trim()
+            .split('.')
+            .map(|s| s.trim().to_string())
+            .collect();
         if path.iter().any(|s| s.is_empty()) {
             return Err(OverrideError::EmptyKey(arg.to_string()));
         }
@@ -94,20 +98,38 @@ mod tests {
     #[test]
     fn override_sets_nested_values_with_units() {
         let mut root: Value = serde_yaml::from_str("bar: {ribs: {angle: 0.9}}\nname: r1").unwrap();
-        Override::parse("bar.ribs.angle=\"60 deg\"").unwrap().apply(&mut root).unwrap();
-        Override::parse("materials.interface.mu=0.001").unwrap().apply(&mut root).unwrap();
+        Override::parse("bar.ribs.angle=\"60 deg\"")
+            .unwrap()
+            .apply(&mut root)
+            .unwrap();
+        Override::parse("materials.interface.mu=0.001")
+            .unwrap()
+            .apply(&mut root)
+            .unwrap();
         assert_eq!(root["bar"]["ribs"]["angle"], Value::String("60 deg".into()));
         assert_eq!(root["materials"]["interface"]["mu"].as_f64(), Some(0.001));
-        Override::parse("bar.ribs.angle=55 deg").unwrap().apply(&mut root).unwrap();
+        Override::parse("bar.ribs.angle=55 deg")
+            .unwrap()
+            .apply(&mut root)
+            .unwrap();
         assert_eq!(root["bar"]["ribs"]["angle"], Value::String("55 deg".into()));
     }
 
     #[test]
     fn malformed_overrides_are_errors() {
-        assert!(matches!(Override::parse("bar.ribs.angle"), Err(OverrideError::NoEquals(_))));
-        assert!(matches!(Override::parse("bar..angle=1"), Err(OverrideError::EmptyKey(_))));
+        assert!(matches!(
+            Override::parse("bar.ribs.angle"),
+            Err(OverrideError::NoEquals(_))
+        ));
+        assert!(matches!(
+            Override::parse("bar..angle=1"),
+            Err(OverrideError::EmptyKey(_))
+        ));
         let mut root: Value = serde_yaml::from_str("name: r1").unwrap();
-        let err = Override::parse("name.first=1").unwrap().apply(&mut root).unwrap_err();
+        let err = Override::parse("name.first=1")
+            .unwrap()
+            .apply(&mut root)
+            .unwrap_err();
         assert!(err.to_string().contains("name is not a mapping"), "{err}");
     }
 }

@@ -17,7 +17,8 @@ fn read_json(path: &Path) -> Result<Value> {
 /// Interface traction profiles written by the solve stage
 /// (`interface_profile.csv`: `step,fed,z,normal,shear`, SI).
 pub fn read_profiles(path: &Path) -> Result<Vec<InterfaceProfile>> {
-    let text = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
     let mut profiles: Vec<(u64, InterfaceProfile)> = Vec::new();
     for (i, line) in text.lines().enumerate().skip(1) {
         let f: Vec<f64> = line
@@ -25,7 +26,12 @@ pub fn read_profiles(path: &Path) -> Result<Vec<InterfaceProfile>> {
             .map(|s| s.trim().parse::<f64>())
             .collect::<Result<_, _>>()
             .with_context(|| format!("{}:{}: not a row of numbers", path.display(), i + 1))?;
-        anyhow::ensure!(f.len() == 5, "{}:{}: expected 5 columns", path.display(), i + 1);
+        anyhow::ensure!(
+            f.len() == 5,
+            "{}:{}: expected 5 columns",
+            path.display(),
+            i + 1
+        );
         let step = f[0] as u64;
         if profiles.last().map(|(s, _)| *s) != Some(step) {
             profiles.push((
@@ -37,7 +43,11 @@ pub fn read_profiles(path: &Path) -> Result<Vec<InterfaceProfile>> {
             ));
         }
         let (_, p) = profiles.last_mut().expect("pushed above");
-        p.samples.push(InterfaceSample { z: f[2], normal: f[3], shear: f[4] });
+        p.samples.push(InterfaceSample {
+            z: f[2],
+            normal: f[3],
+            shear: f[4],
+        });
     }
     Ok(profiles.into_iter().map(|(_, p)| p).collect())
 }
@@ -55,7 +65,10 @@ pub fn run(ctx: &Ctx, solve_dir: &Path, out: &Path) -> Result<()> {
     )?;
     let stage_time = |stage: &str, file: &str, pointer: &str| -> Value {
         let path = ctx.store.artifact_dir(ctx.keys.get(stage)).join(file);
-        read_json(&path).ok().and_then(|v| v.pointer(pointer).cloned()).unwrap_or(Value::Null)
+        read_json(&path)
+            .ok()
+            .and_then(|v| v.pointer(pointer).cloned())
+            .unwrap_or(Value::Null)
     };
     let summary = json!({
         "scene": ctx.scene.name,
@@ -68,7 +81,10 @@ pub fn run(ctx: &Ctx, solve_dir: &Path, out: &Path) -> Result<()> {
             "solve": solve.pointer("/summary/wall_time_s/total").cloned().unwrap_or(Value::Null),
         },
     });
-    crate::store::write_atomic(&out.join("summary.json"), &serde_json::to_vec_pretty(&summary)?)?;
+    crate::store::write_atomic(
+        &out.join("summary.json"),
+        &serde_json::to_vec_pretty(&summary)?,
+    )?;
 
     let plots = out.join("plots");
     if !request.plots.is_empty() {
@@ -76,7 +92,11 @@ pub fn run(ctx: &Ctx, solve_dir: &Path, out: &Path) -> Result<()> {
     }
     let label = ctx.scene.name.as_str();
     let profiles_csv = solve_dir.join("interface_profile.csv");
-    let profiles = if profiles_csv.is_file() { read_profiles(&profiles_csv)? } else { Vec::new() };
+    let profiles = if profiles_csv.is_file() {
+        read_profiles(&profiles_csv)?
+    } else {
+        Vec::new()
+    };
     for format in &request.plots {
         match format {
             PlotFormat::Png => {
@@ -103,7 +123,10 @@ pub fn run(ctx: &Ctx, solve_dir: &Path, out: &Path) -> Result<()> {
         curve.fed_at_peak * 1e3,
         curve
             .residual_bond_stress
-            .map_or("n/a (no slip past the peak)".to_string(), |r| format!("{:.3} MPa", r / 1e6))
+            .map_or("n/a (no slip past the peak)".to_string(), |r| format!(
+                "{:.3} MPa",
+                r / 1e6
+            ))
     ));
     Ok(())
 }

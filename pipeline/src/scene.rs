@@ -72,7 +72,9 @@ fn check_name(name: &str) -> Result<(), String> {
     let ok = !name.is_empty()
         && name.len() <= 100
         && !name.starts_with('.')
-        && name.chars().all(|c| c.is_ascii_alphanumeric() || matches!(c, '-' | '_' | '.'));
+        && name
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || matches!(c, '-' | '_' | '.'));
     if ok {
         Ok(())
     } else {
@@ -101,13 +103,17 @@ impl Scene {
         for arg in overrides {
             Override::parse(arg)
                 .and_then(|o| o.apply(&mut tree))
-                .map_err(|source| SceneError::Override { path: path.to_path_buf(), source })?;
+                .map_err(|source| SceneError::Override {
+                    path: path.to_path_buf(),
+                    source,
+                })?;
         }
         let written = serde_json::to_value(&tree).unwrap_or(serde_json::Value::Null);
         let raw: RawScene = serde_yaml::from_value(tree).map_err(yaml_err)?;
-        let mut scene = raw
-            .resolve()
-            .map_err(|message| SceneError::Invalid { path: path.to_path_buf(), message })?;
+        let mut scene = raw.resolve().map_err(|message| SceneError::Invalid {
+            path: path.to_path_buf(),
+            message,
+        })?;
         scene.written = written;
         Ok(scene)
     }
@@ -116,7 +122,8 @@ impl Scene {
 impl RawScene {
     pub fn resolve(&self) -> Result<Scene, String> {
         check_name(&self.name)?;
-        let (bar, specimen) = geom::spec::resolve(&self.bar, &self.specimen).map_err(|e| e.to_string())?;
+        let (bar, specimen) =
+            geom::spec::resolve(&self.bar, &self.specimen).map_err(|e| e.to_string())?;
         Ok(Scene {
             name: self.name.clone(),
             bar,

@@ -10,7 +10,9 @@ use mesh::{InterfaceZone, Model};
 use solve::assembly::{ElementLaws, SharedBulkLaw, SharedInterfaceLaw};
 use solve::interface_element::{InterfaceKernel, INTERFACE_POINTS};
 use solve::laws::{InterfaceLaw, TangentKind};
-use solve::pullout::{Checkpoint, CommittedView, Cutback, CurveRow, Observer, SolveError, StepReport};
+use solve::pullout::{
+    Checkpoint, CommittedView, CurveRow, Cutback, Observer, SolveError, StepReport,
+};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -32,7 +34,12 @@ pub fn element_laws(model: &Model, scene: &crate::scene::Scene) -> Result<Elemen
     };
     ElementLaws::sized(
         model,
-        |l| materials.concrete.at_size(l).map(|law| Arc::new(law) as SharedBulkLaw),
+        |l| {
+            materials
+                .concrete
+                .at_size(l)
+                .map(|law| Arc::new(law) as SharedBulkLaw)
+        },
         steel,
         adhesive,
         free,
@@ -59,7 +66,11 @@ fn curve_csv(rows: &[CurveRow]) -> Vec<u8> {
 
 /// Mean interface tractions in axial bins along the adhesive zone, for the
 /// paper's Fig. 12 style profile: (z, t_n, t_t) per bin with elements.
-fn interface_profile(model: &Model, laws: &ElementLaws, view: &CommittedView<'_>) -> Vec<(f64, f64, f64)> {
+fn interface_profile(
+    model: &Model,
+    laws: &ElementLaws,
+    view: &CommittedView<'_>,
+) -> Vec<(f64, f64, f64)> {
     let bins = 80usize;
     let (z0, z1) = (0.0, model.adhesive_length);
     let mut acc = vec![(0.0f64, 0.0f64, 0.0f64); bins];
@@ -67,10 +78,21 @@ fn interface_profile(model: &Model, laws: &ElementLaws, view: &CommittedView<'_>
         if e.zone != InterfaceZone::Adhesive || laws.interfaces[i].is_none() {
             continue;
         }
-        let z = e.nodes[..3].iter().map(|&n| model.nodes[n as usize][2]).sum::<f64>() / 3.0;
-        let b = (((z - z0) / (z1 - z0)) * bins as f64).floor().clamp(0.0, bins as f64 - 1.0) as usize;
+        let z = e.nodes[..3]
+            .iter()
+            .map(|&n| model.nodes[n as usize][2])
+            .sum::<f64>()
+            / 3.0;
+        let b = (((z - z0) / (z1 - z0)) * bins as f64)
+            .floor()
+            .clamp(0.0, bins as f64 - 1.0) as usize;
         let law = laws.interfaces[i].as_ref().expect("checked above");
-        if let Some(t) = mean_traction(e, law.as_ref(), view.u, &view.states.interface[INTERFACE_POINTS * i..]) {
+        if let Some(t) = mean_traction(
+            e,
+            law.as_ref(),
+            view.u,
+            &view.states.interface[INTERFACE_POINTS * i..],
+        ) {
             acc[b].0 += e.area;
             acc[b].1 += e.area * t[0];
             acc[b].2 += e.area * t[1];
@@ -79,7 +101,13 @@ fn interface_profile(model: &Model, laws: &ElementLaws, view: &CommittedView<'_>
     acc.iter()
         .enumerate()
         .filter(|(_, a)| a.0 > 0.0)
-        .map(|(b, a)| (z0 + (b as f64 + 0.5) * (z1 - z0) / bins as f64, a.1 / a.0, a.2 / a.0))
+        .map(|(b, a)| {
+            (
+                z0 + (b as f64 + 0.5) * (z1 - z0) / bins as f64,
+                a.1 / a.0,
+                a.2 / a.0,
+            )
+        })
         .collect()
 }
 
@@ -95,9 +123,11 @@ fn mean_traction(
     let ue: [f64; 18] = std::array::from_fn(|i| u[3 * e.nodes[i / 3] as usize + i % 3]);
     let mut t = [0.0; 3];
     for (p, st) in states.iter().take(INTERFACE_POINTS).enumerate() {
-        let r = law.step(st, &k.local_jump(&ue, p), TangentKind::Secant).ok()?;
-        for c in 0..3 {
-            t[c] += r.traction[c] / INTERFACE_POINTS as f64;
+        let r = law
+            .step(st, &k.local_jump(&ue, p), TangentKind::Secant)
+            .ok()?;
+        for (tc, rc) in t.iter_mut().zip(r.traction.iter()) {
+            *tc += rc / INTERFACE_POINTS as f64;
         }
     }
     Some(t)
@@ -119,16 +149,39 @@ struct StageObserver<'a> {
 }
 
 impl StageObserver<'_> {
-    fn write_fields(&mut self, name: &str, report: &StepReport, view: &CommittedView<'_>) -> Result<()> {
+    fn write_fields(
+        &mut self,
+        name: &str,
+        report: &StepReport,
+        view: &CommittedView<'_>,
+    ) -> Result<()> {
         std::fs::create_dir_all(&self.fields_dir)?;
         let model = view.model;
-        solve::fields::write_bulk_vtu(&self.fields_dir.join(format!("{name}_bulk.vtu")), model, self.laws, view.u, view.states)?;
-        solve::fields::write_interface_vtu(&self.fields_dir.join(format!("{name}_interface.vtu")), model, self.laws, view.u, view.states)?;
+        solve::fields::write_bulk_vtu(
+            &self.fields_dir.join(format!("{name}_bulk.vtu")),
+            model,
+            self.laws,
+            view.u,
+            view.states,
+        )?;
+        solve::fields::write_interface_vtu(
+            &self.fields_dir.join(format!("{name}_interface.vtu")),
+            model,
+            self.laws,
+            view.u,
+            view.states,
+        )?;
         let mut lines = Vec::new();
         for (z, tn, tt) in interface_profile(model, self.laws, view) {
-            writeln!(lines, "{},{:e},{:e},{:e},{:e}", report.row.step, report.row.fed, z, tn, tt)?;
+            writeln!(
+                lines,
+                "{},{:e},{:e},{:e},{:e}",
+                report.row.step, report.row.fed, z, tn, tt
+            )?;
         }
-        let mut file = std::fs::OpenOptions::new().append(true).open(&self.profile_path)?;
+        let mut file = std::fs::OpenOptions::new()
+            .append(true)
+            .open(&self.profile_path)?;
         file.write_all(&lines)?;
         Ok(())
     }
@@ -157,9 +210,13 @@ impl Observer for StageObserver<'_> {
             self.peak = r.bond_stress;
             result = self.write_fields("peak", report, view);
         }
-        if result.is_ok() && self.last_checkpoint.elapsed() >= self.checkpoint_cost * CHECKPOINT_COST_RATIO {
+        if result.is_ok()
+            && self.last_checkpoint.elapsed() >= self.checkpoint_cost * CHECKPOINT_COST_RATIO
+        {
             let started = Instant::now();
-            result = (view.checkpoint)().save(&self.checkpoint_path).map_err(Into::into);
+            result = (view.checkpoint)()
+                .save(&self.checkpoint_path)
+                .map_err(Into::into);
             self.checkpoint_cost = started.elapsed();
             self.last_checkpoint = Instant::now();
         }
@@ -193,7 +250,9 @@ pub fn run(ctx: &Ctx, mesh_dir: &Path, out: &Path) -> Result<()> {
                 Some(cp)
             }
             Err(e) => {
-                ctx.printer.line(&format!("solve: ignoring the unusable checkpoint ({e}); starting over"));
+                ctx.printer.line(&format!(
+                    "solve: ignoring the unusable checkpoint ({e}); starting over"
+                ));
                 None
             }
         }
@@ -246,7 +305,14 @@ pub fn run(ctx: &Ctx, mesh_dir: &Path, out: &Path) -> Result<()> {
     }
     let (result, stopped) = match outcome {
         Ok(result) => (result, None),
-        Err(SolveError::Stalled { partial, step, u_imposed, residual_history, cause, step_size }) => {
+        Err(SolveError::Stalled {
+            partial,
+            step,
+            u_imposed,
+            residual_history,
+            cause,
+            step_size,
+        }) => {
             let why = format!(
                 "step {step} did not converge at the minimum step size {step_size:e} m (imposed u = {u_imposed:e} m); \
                  residual history {residual_history:?}; likely cause: {cause}"
@@ -259,8 +325,18 @@ pub fn run(ctx: &Ctx, mesh_dir: &Path, out: &Path) -> Result<()> {
         let last = result.rows.last().copied();
         if let Some(row) = last {
             let cp = &result.last;
-            let view = CommittedView { model: &model, laws: &laws, checkpoint: &|| cp.clone(), u: &cp.u, states: &cp.states };
-            let report = StepReport { row, step_size: 0.0, times: Default::default() };
+            let view = CommittedView {
+                model: &model,
+                laws: &laws,
+                checkpoint: &|| cp.clone(),
+                u: &cp.u,
+                states: &cp.states,
+            };
+            let report = StepReport {
+                row,
+                step_size: 0.0,
+                times: Default::default(),
+            };
             observer.write_fields("end", &report, &view)?;
         }
     }
@@ -271,7 +347,10 @@ pub fn run(ctx: &Ctx, mesh_dir: &Path, out: &Path) -> Result<()> {
         "stopped": stopped,
         "cutbacks": observer.cutbacks,
     });
-    crate::store::write_atomic(&out.join("solve.json"), &serde_json::to_vec_pretty(&solve_json)?)?;
+    crate::store::write_atomic(
+        &out.join("solve.json"),
+        &serde_json::to_vec_pretty(&solve_json)?,
+    )?;
     let _ = std::fs::remove_file(&checkpoint_path);
     if let Some(why) = &stopped {
         // The converged part is a result like any other (a rerun with the

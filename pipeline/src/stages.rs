@@ -82,7 +82,13 @@ impl Keys {
                 "outputs": to_json(&scene.outputs.post),
             }),
         );
-        let w = |pointer: &str| scene.written.pointer(pointer).cloned().unwrap_or(serde_json::Value::Null);
+        let w = |pointer: &str| {
+            scene
+                .written
+                .pointer(pointer)
+                .cloned()
+                .unwrap_or(serde_json::Value::Null)
+        };
         Keys {
             geometry: geometry.with_written(json!({"bar": w("/bar"), "specimen": w("/specimen")})),
             mesh: mesh.with_written(json!({"mesh": w("/mesh")})),
@@ -129,7 +135,11 @@ pub enum StageStatus {
     Interrupted,
 }
 
-pub fn status(store: &Store, scene: &Scene, keys: &Keys) -> Result<Vec<(&'static str, StageStatus)>> {
+pub fn status(
+    store: &Store,
+    scene: &Scene,
+    keys: &Keys,
+) -> Result<Vec<(&'static str, StageStatus)>> {
     let record = store.read_record(&scene.name)?;
     Ok(STAGES
         .iter()
@@ -159,7 +169,12 @@ fn stale_reasons(old: &StageKey, new: &StageKey) -> Vec<String> {
         changed_keys(&old.written, &new.written)
     };
     let resolved = changed_keys(&old.inputs, &new.inputs);
-    reasons.extend(resolved.iter().filter(|k| STAGES.contains(&k.as_str())).cloned());
+    reasons.extend(
+        resolved
+            .iter()
+            .filter(|k| STAGES.contains(&k.as_str()))
+            .cloned(),
+    );
     if reasons.is_empty() {
         reasons = resolved;
     }
@@ -209,7 +224,8 @@ impl Ctx<'_> {
         if !ran {
             self.printer.line(&format!("{stage}: up to date"));
         }
-        self.store.publish(&self.scene.name, key, published_files(stage))?;
+        self.store
+            .publish(&self.scene.name, key, published_files(stage))?;
         Ok(ran)
     }
 

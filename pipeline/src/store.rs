@@ -40,7 +40,10 @@ pub enum StoreError {
 }
 
 fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> StoreError + '_ {
-    move |source| StoreError::Io { path: path.to_path_buf(), source }
+    move |source| StoreError::Io {
+        path: path.to_path_buf(),
+        source,
+    }
 }
 
 /// The identity of one stage run: its name and what it reads.
@@ -58,13 +61,19 @@ pub struct StageKey {
 
 impl StageKey {
     pub fn new(stage: &str, inputs: Value) -> Self {
-        let document = serde_json::json!({ "stage": stage, "store_format": STORE_FORMAT, "inputs": inputs });
+        let document =
+            serde_json::json!({ "stage": stage, "store_format": STORE_FORMAT, "inputs": inputs });
         // serde_json's Map is ordered by key (no preserve_order feature), so
         // this serialisation is canonical.
         let bytes = serde_json::to_vec(&document).expect("JSON values always serialise");
         let digest = Sha256::digest(&bytes);
         let key = digest.iter().take(16).map(|b| format!("{b:02x}")).collect();
-        StageKey { stage: stage.to_string(), key, inputs, written: Value::Null }
+        StageKey {
+            stage: stage.to_string(),
+            key,
+            inputs,
+            written: Value::Null,
+        }
     }
 
     pub fn with_written(mut self, written: Value) -> Self {
@@ -79,7 +88,11 @@ pub fn flatten(value: &Value) -> BTreeMap<String, String> {
         match v {
             Value::Object(map) if !map.is_empty() => {
                 for (k, child) in map {
-                    let p = if prefix.is_empty() { k.clone() } else { format!("{prefix}.{k}") };
+                    let p = if prefix.is_empty() {
+                        k.clone()
+                    } else {
+                        format!("{prefix}.{k}")
+                    };
                     walk(&p, child, out);
                 }
             }
@@ -134,7 +147,8 @@ impl Store {
     }
 
     pub fn partial_dir(&self, key: &StageKey) -> PathBuf {
-        self.stage_root(&key.stage).join(format!("{}.partial", key.key))
+        self.stage_root(&key.stage)
+            .join(format!("{}.partial", key.key))
     }
 
     pub fn scene_dir(&self, scene: &str) -> PathBuf {
@@ -280,7 +294,10 @@ fn same_file(_: &Path, _: &Path) -> bool {
 }
 
 fn tmp_name(path: &Path) -> PathBuf {
-    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
     path.with_file_name(format!(".{name}.tmp-{}", std::process::id()))
 }
 
@@ -312,12 +329,24 @@ mod tests {
 
     #[test]
     fn keys_depend_on_content_only_and_name_changed_keys() {
-        let a = StageKey::new("solve", json!({"materials": {"interface": {"mu": 0.3}}, "mesh": "k1"}));
-        let b = StageKey::new("solve", json!({"mesh": "k1", "materials": {"interface": {"mu": 0.3}}}));
-        let c = StageKey::new("solve", json!({"mesh": "k1", "materials": {"interface": {"mu": 0.001}}}));
+        let a = StageKey::new(
+            "solve",
+            json!({"materials": {"interface": {"mu": 0.3}}, "mesh": "k1"}),
+        );
+        let b = StageKey::new(
+            "solve",
+            json!({"mesh": "k1", "materials": {"interface": {"mu": 0.3}}}),
+        );
+        let c = StageKey::new(
+            "solve",
+            json!({"mesh": "k1", "materials": {"interface": {"mu": 0.001}}}),
+        );
         assert_eq!(a.key, b.key);
         assert_ne!(a.key, c.key);
-        assert_eq!(changed_keys(&a.inputs, &c.inputs), vec!["materials.interface.mu".to_string()]);
+        assert_eq!(
+            changed_keys(&a.inputs, &c.inputs),
+            vec!["materials.interface.mu".to_string()]
+        );
     }
 
     #[test]

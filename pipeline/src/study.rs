@@ -87,18 +87,29 @@ pub enum StudyError {
 pub fn value_arg(v: &serde_yaml::Value) -> String {
     match v {
         serde_yaml::Value::String(s) => format!("{s:?}"),
-        other => serde_yaml::to_string(other).unwrap_or_default().trim().to_string(),
+        other => serde_yaml::to_string(other)
+            .unwrap_or_default()
+            .trim()
+            .to_string(),
     }
 }
 
 impl Study {
     pub fn load(path: &Path) -> Result<Study, StudyError> {
-        let text = std::fs::read_to_string(path)
-            .map_err(|source| StudyError::Read { path: path.to_path_buf(), source })?;
-        let invalid = |message: String| StudyError::Invalid { path: path.to_path_buf(), message };
+        let text = std::fs::read_to_string(path).map_err(|source| StudyError::Read {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let invalid = |message: String| StudyError::Invalid {
+            path: path.to_path_buf(),
+            message,
+        };
         let raw: RawStudy = serde_yaml::from_str(&text).map_err(|e| invalid(e.to_string()))?;
         if raw.name.is_empty()
-            || !raw.name.chars().all(|c| c.is_ascii_alphanumeric() || matches!(c, '-' | '_' | '.'))
+            || !raw
+                .name
+                .chars()
+                .all(|c| c.is_ascii_alphanumeric() || matches!(c, '-' | '_' | '.'))
         {
             return Err(invalid(format!(
                 "name: {:?} must be letters, digits, '-', '_' or '.'",
@@ -119,13 +130,19 @@ impl Study {
             let values = v
                 .as_sequence()
                 .filter(|s| !s.is_empty())
-                .ok_or_else(|| invalid(format!("parameters.{key}: expected a non-empty list of values")))?
+                .ok_or_else(|| {
+                    invalid(format!(
+                        "parameters.{key}: expected a non-empty list of values"
+                    ))
+                })?
                 .clone();
             keys.push(key);
             lists.push(values);
         }
         if keys.is_empty() {
-            return Err(invalid("parameters: at least one key with a list of values".into()));
+            return Err(invalid(
+                "parameters: at least one key with a list of values".into(),
+            ));
         }
         if raw.kind == StudyKind::Convergence && keys.len() != 1 {
             return Err(invalid(format!(
@@ -149,7 +166,9 @@ impl Study {
                         l.len()
                     )));
                 }
-                (0..n).map(|i| lists.iter().map(|l| l[i].clone()).collect()).collect()
+                (0..n)
+                    .map(|i| lists.iter().map(|l| l[i].clone()).collect())
+                    .collect()
             }
             Combine::Product => lists.iter().fold(vec![Vec::new()], |acc, list| {
                 acc.iter()
@@ -163,8 +182,11 @@ impl Study {
                     .collect()
             }),
         };
-        let common: Vec<String> =
-            raw.set.iter().map(|(k, v)| format!("{k}={}", value_arg(v))).collect();
+        let common: Vec<String> = raw
+            .set
+            .iter()
+            .map(|(k, v)| format!("{k}={}", value_arg(v)))
+            .collect();
         let cases = combos
             .into_iter()
             .enumerate()
@@ -173,12 +195,27 @@ impl Study {
                 let parameters: Vec<(String, serde_yaml::Value)> =
                     keys.iter().cloned().zip(values).collect();
                 let mut overrides = common.clone();
-                overrides.extend(parameters.iter().map(|(k, v)| format!("{k}={}", value_arg(v))));
+                overrides.extend(
+                    parameters
+                        .iter()
+                        .map(|(k, v)| format!("{k}={}", value_arg(v))),
+                );
                 overrides.push(format!("name={name}"));
-                Case { index, name, parameters, overrides }
+                Case {
+                    index,
+                    name,
+                    parameters,
+                    overrides,
+                }
             })
             .collect();
-        Ok(Study { name: raw.name, kind: raw.kind, base, keys, cases })
+        Ok(Study {
+            name: raw.name,
+            kind: raw.kind,
+            base,
+            keys,
+            cases,
+        })
     }
 }
 
@@ -205,11 +242,21 @@ mod tests {
         let s = Study::load(&p).unwrap();
         assert_eq!(s.cases.len(), 6);
         assert_eq!(s.cases[1].overrides, vec!["a.b=1", "c=\"x\"", "name=s--1"]);
-        let p = write(&dir, "z.yaml", "name: z\nbase: base.yaml\ncombine: zip\nparameters:\n  a: [1, 2]\n  c: [3, 4, 5]\n");
+        let p = write(
+            &dir,
+            "z.yaml",
+            "name: z\nbase: base.yaml\ncombine: zip\nparameters:\n  a: [1, 2]\n  c: [3, 4, 5]\n",
+        );
         let err = Study::load(&p).unwrap_err().to_string();
-        assert!(err.contains("parameters.c") && err.contains("equal lengths"), "{err}");
+        assert!(
+            err.contains("parameters.c") && err.contains("equal lengths"),
+            "{err}"
+        );
         let p = write(&dir, "c.yaml", "name: c\nbase: base.yaml\nkind: convergence\nparameters:\n  mesh.h_interface: [1, 2]\n");
-        assert!(Study::load(&p).unwrap_err().to_string().contains("at least 3 grids"));
+        assert!(Study::load(&p)
+            .unwrap_err()
+            .to_string()
+            .contains("at least 3 grids"));
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -109,7 +109,12 @@ pub fn run(args: &StudyArgs, printer: &Printer) -> Result<ExitCode> {
     let exe = std::env::current_exe().context("locating the ribbar executable")?;
     let logs = out.join("logs");
     std::fs::create_dir_all(&logs).with_context(|| format!("creating {}", logs.display()))?;
-    printer.line(&format!("study {}: {} cases, {} at once", study.name, study.cases.len(), args.jobs));
+    printer.line(&format!(
+        "study {}: {} cases, {} at once",
+        study.name,
+        study.cases.len(),
+        args.jobs
+    ));
 
     let failed = Mutex::new(Vec::<(String, String)>::new());
     let fail = |case: &Case, stage: &str, log: &Path| {
@@ -120,22 +125,36 @@ pub fn run(args: &StudyArgs, printer: &Printer) -> Result<ExitCode> {
     };
     // Meshes first: gmsh's memory is small, and the mesh sizes tell the
     // solves' memory.
-    pool(&study.cases, args.jobs, |_| 0.0, f64::INFINITY, |case| {
-        let log = logs.join(format!("{}.mesh.log", case.name));
-        match run_child(&exe, &case_args(&study, case, &args.work, "mesh"), &log) {
-            Ok(true) => printer.line(&format!("[{}] mesh ready", case.name)),
-            _ => fail(case, "mesh", &log),
-        }
-    });
+    pool(
+        &study.cases,
+        args.jobs,
+        |_| 0.0,
+        f64::INFINITY,
+        |case| {
+            let log = logs.join(format!("{}.mesh.log", case.name));
+            match run_child(&exe, &case_args(&study, case, &args.work, "mesh"), &log) {
+                Ok(true) => printer.line(&format!("[{}] mesh ready", case.name)),
+                _ => fail(case, "mesh", &log),
+            }
+        },
+    );
     let meshed: Vec<&Case> = {
         let f = failed.lock().unwrap_or_else(|e| e.into_inner());
-        study.cases.iter().filter(|c| !f.iter().any(|(n, _)| *n == c.name)).collect()
+        study
+            .cases
+            .iter()
+            .filter(|c| !f.iter().any(|(n, _)| *n == c.name))
+            .collect()
     };
     let budget = args.memory_gib * (1u64 << 30) as f64;
     pool(
         &meshed,
         args.jobs,
-        |case| case_dofs(&args.work, case).map(estimated_solve_bytes).unwrap_or(0.0),
+        |case| {
+            case_dofs(&args.work, case)
+                .map(estimated_solve_bytes)
+                .unwrap_or(0.0)
+        },
         budget,
         |case| {
             let log = logs.join(format!("{}.run.log", case.name));
@@ -153,7 +172,11 @@ pub fn run(args: &StudyArgs, printer: &Printer) -> Result<ExitCode> {
     if failed.is_empty() {
         Ok(ExitCode::SUCCESS)
     } else {
-        bail!("{} of {} cases failed (their logs are named above); the others' results are kept", failed.len(), study.cases.len())
+        bail!(
+            "{} of {} cases failed (their logs are named above); the others' results are kept",
+            failed.len(),
+            study.cases.len()
+        )
     }
 }
 
@@ -175,10 +198,20 @@ pub fn collect(study: &Study, work: &Path, out: &Path, printer: &Printer) -> Res
         let label = case
             .parameters
             .iter()
-            .map(|(k, v)| format!("{}={}", k.rsplit('.').next().unwrap_or(k), crate::study::value_arg(v).trim_matches('"')))
+            .map(|(k, v)| {
+                format!(
+                    "{}={}",
+                    k.rsplit('.').next().unwrap_or(k),
+                    crate::study::value_arg(v).trim_matches('"')
+                )
+            })
             .collect::<Vec<_>>()
             .join(", ");
-        cases.push(StudyCase::from_summary(&case.name, &case.parameters, &summary));
+        cases.push(StudyCase::from_summary(
+            &case.name,
+            &case.parameters,
+            &summary,
+        ));
         if study.kind == StudyKind::Convergence {
             let scene = crate::scene::Scene::load(&study.base, &case.overrides)?;
             grids.push((scene.mesh.h_interface, summary.clone()));
@@ -189,8 +222,15 @@ pub fn collect(study: &Study, work: &Path, out: &Path, printer: &Printer) -> Res
         bail!("no case of study {} has results", study.name);
     }
     post::write_study_tables(&cases, &out.join("table.csv"), &out.join("table.md"))?;
-    let refs: Vec<(&str, &[CurveRow])> = curves.iter().map(|(l, r)| (l.as_str(), r.as_slice())).collect();
-    post::bond_slip_plot(&refs, &out.join("bond_slip.png"), &out.join("bond_slip.svg"))?;
+    let refs: Vec<(&str, &[CurveRow])> = curves
+        .iter()
+        .map(|(l, r)| (l.as_str(), r.as_slice()))
+        .collect();
+    post::bond_slip_plot(
+        &refs,
+        &out.join("bond_slip.png"),
+        &out.join("bond_slip.svg"),
+    )?;
     if study.kind == StudyKind::Convergence {
         convergence(&grids, out)?;
     }
@@ -207,7 +247,9 @@ fn convergence(grids: &[(f64, serde_json::Value)], out: &Path) -> Result<()> {
                     h: *h,
                     value: s.pointer(pointer)?.as_f64()?,
                     dofs: s.pointer("/solver/summary/dofs").and_then(|v| v.as_u64()),
-                    wall_time: s.pointer("/solver/summary/wall_time_s/total").and_then(|v| v.as_f64()),
+                    wall_time: s
+                        .pointer("/solver/summary/wall_time_s/total")
+                        .and_then(|v| v.as_f64()),
                 })
             })
             .collect()
@@ -220,7 +262,11 @@ fn convergence(grids: &[(f64, serde_json::Value)], out: &Path) -> Result<()> {
     .iter()
     .filter_map(|(name, p)| post::convergence_study(name, &quantity(p)).ok())
     .collect();
-    post::write_convergence_tables(&studies, &out.join("convergence.csv"), &out.join("convergence.md"))?;
+    post::write_convergence_tables(
+        &studies,
+        &out.join("convergence.csv"),
+        &out.join("convergence.md"),
+    )?;
     let series: Vec<_> = studies
         .iter()
         .map(post::ErrorTimeSeries::from_study)
@@ -229,7 +275,11 @@ fn convergence(grids: &[(f64, serde_json::Value)], out: &Path) -> Result<()> {
     // A series whose triplets all diverged has no error to plot; the
     // tables say why.
     if !series.is_empty() {
-        post::error_vs_time_plot(&series, &out.join("error_vs_time.png"), &out.join("error_vs_time.svg"))?;
+        post::error_vs_time_plot(
+            &series,
+            &out.join("error_vs_time.png"),
+            &out.join("error_vs_time.svg"),
+        )?;
     }
     Ok(())
 }
@@ -251,11 +301,21 @@ pub fn snakefile(study: &Study, args: &StudyArgs) -> Result<String> {
     let work = std::path::absolute(&args.work).unwrap_or_else(|_| args.work.clone());
     let base = std::path::absolute(&study.base).unwrap_or_else(|_| study.base.clone());
     let study_file = std::path::absolute(&args.study).unwrap_or_else(|_| args.study.clone());
-    text.push_str(&format!("RIBBAR = {}\nWORK = {}\nBASE = {}\n\n", q(&exe.display().to_string()), q(&work.display().to_string()), q(&base.display().to_string())));
+    text.push_str(&format!(
+        "RIBBAR = {}\nWORK = {}\nBASE = {}\n\n",
+        q(&exe.display().to_string()),
+        q(&work.display().to_string()),
+        q(&base.display().to_string())
+    ));
     let outs: Vec<String> = study
         .cases
         .iter()
-        .map(|c| format!("    {},\n", q(&format!("{}/{}/summary.json", work.display(), c.name))))
+        .map(|c| {
+            format!(
+                "    {},\n",
+                q(&format!("{}/{}/summary.json", work.display(), c.name))
+            )
+        })
         .collect();
     text.push_str(&format!(
         "rule all:\n    input:\n        {},\n\n",
@@ -267,9 +327,18 @@ pub fn snakefile(study: &Study, args: &StudyArgs) -> Result<String> {
         q(&format!("{}/{}/table.csv", work.display(), study.name)),
         shell_quote(&study_file.display().to_string()),
     ));
-    let stage_out = [("geometry", "geometry.json"), ("mesh", "mesh.json"), ("solve", "curve.csv"), ("post", "summary.json")];
+    let stage_out = [
+        ("geometry", "geometry.json"),
+        ("mesh", "mesh.json"),
+        ("solve", "curve.csv"),
+        ("post", "summary.json"),
+    ];
     for case in &study.cases {
-        let sets: String = case.overrides.iter().map(|o| format!(" --set {}", shell_quote(o))).collect();
+        let sets: String = case
+            .overrides
+            .iter()
+            .map(|o| format!(" --set {}", shell_quote(o)))
+            .collect();
         let rule_name = case.name.replace(['-', '.'], "_");
         for (i, (stage, file)) in stage_out.iter().enumerate() {
             text.push_str(&format!("rule {rule_name}_{stage}:\n"));
@@ -293,4 +362,3 @@ pub fn snakefile(study: &Study, args: &StudyArgs) -> Result<String> {
 fn shell_quote(s: &str) -> String {
     format!("'{}'", s.replace('\'', "'\\''"))
 }
-

@@ -8,7 +8,10 @@ use std::time::{Duration, Instant};
 const TINY: &str = "tests/data/tiny-smooth.yaml";
 
 fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).parent().unwrap().to_path_buf()
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .unwrap()
+        .to_path_buf()
 }
 
 fn work_dir(name: &str) -> PathBuf {
@@ -27,7 +30,11 @@ fn ribbar(args: &[&str]) -> Output {
 }
 
 fn text(o: &Output) -> String {
-    format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr))
+    format!(
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    )
 }
 
 fn ok(args: &[&str]) -> String {
@@ -42,7 +49,10 @@ fn read(path: &Path) -> String {
 
 fn stage_line<'a>(out: &'a str, stage: &str) -> &'a str {
     out.lines()
-        .find(|l| l.starts_with(&format!("{stage}: ")) && (l.contains("up to date") || l.contains("done in")))
+        .find(|l| {
+            l.starts_with(&format!("{stage}: "))
+                && (l.contains("up to date") || l.contains("done in"))
+        })
         .unwrap_or_else(|| panic!("no line for stage {stage} in:\n{out}"))
 }
 
@@ -76,12 +86,20 @@ fn run_writes_every_artifact() {
     let curve = read(&scene.join("curve.csv"));
     assert!(curve.starts_with("step,u_imposed,force,fed,bond_stress,iterations\n"));
     assert!(curve.lines().count() > 5, "{curve}");
-    let summary: serde_json::Value = serde_json::from_str(&read(&scene.join("summary.json"))).unwrap();
-    let peak = summary.pointer("/curve/peak_bond_stress").and_then(|v| v.as_f64()).unwrap();
+    let summary: serde_json::Value =
+        serde_json::from_str(&read(&scene.join("summary.json"))).unwrap();
+    let peak = summary
+        .pointer("/curve/peak_bond_stress")
+        .and_then(|v| v.as_f64())
+        .unwrap();
     assert!(peak > 1e5 && peak < 1e8, "peak bond stress {peak} Pa");
-    assert!(summary.pointer("/solver/summary/wall_time_s/factorisation").is_some());
+    assert!(summary
+        .pointer("/solver/summary/wall_time_s/factorisation")
+        .is_some());
     let vtu = read(&scene.join("fields/peak_bulk.vtu"));
-    assert!(vtu.contains("<VTKFile") && vtu.contains("Name=\"D\"") && vtu.contains("principal_stress"));
+    assert!(
+        vtu.contains("<VTKFile") && vtu.contains("Name=\"D\"") && vtu.contains("principal_stress")
+    );
     let png = std::fs::read(scene.join("plots/bond_slip.png")).unwrap();
     assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n");
     // Nothing half-written is left beside the published files.
@@ -110,9 +128,15 @@ fn stages_rerun_only_what_changed() {
 
     let mu = "materials.interface.mu=0.001";
     let status = ok(&["status", TINY, "--work", w, "--set", mu]);
-    assert!(status.contains("geometry  up to date") && status.contains("mesh      up to date"), "{status}");
+    assert!(
+        status.contains("geometry  up to date") && status.contains("mesh      up to date"),
+        "{status}"
+    );
     let solve_line = status.lines().find(|l| l.starts_with("solve")).unwrap();
-    assert!(solve_line.contains("stale") && solve_line.contains("materials.interface.mu"), "{status}");
+    assert!(
+        solve_line.contains("stale") && solve_line.contains("materials.interface.mu"),
+        "{status}"
+    );
     let out = ok(&["run", TINY, "--work", w, "--set", mu]);
     assert!(stage_line(&out, "geometry").contains("up to date"), "{out}");
     assert!(stage_line(&out, "mesh").contains("up to date"), "{out}");
@@ -121,14 +145,26 @@ fn stages_rerun_only_what_changed() {
 
     let h = "mesh.h_interface=2.5 mm";
     let status = ok(&["status", TINY, "--work", w, "--set", h]);
-    assert!(status.lines().any(|l| l.starts_with("mesh") && l.contains("mesh.h_interface")), "{status}");
+    assert!(
+        status
+            .lines()
+            .any(|l| l.starts_with("mesh") && l.contains("mesh.h_interface")),
+        "{status}"
+    );
     let out = ok(&["run", TINY, "--work", w, "--set", h]);
     assert!(stage_line(&out, "geometry").contains("up to date"), "{out}");
     for stage in ["mesh", "solve", "post"] {
         assert!(stage_line(&out, stage).contains("done in"), "{out}");
     }
     // Changing only how post reports reruns post alone.
-    let out = ok(&["run", TINY, "--work", w, "--set", "outputs.energy_fed_limit=0.1 mm"]);
+    let out = ok(&[
+        "run",
+        TINY,
+        "--work",
+        w,
+        "--set",
+        "outputs.energy_fed_limit=0.1 mm",
+    ]);
     assert!(stage_line(&out, "solve").contains("up to date"), "{out}");
     assert!(stage_line(&out, "post").contains("done in"), "{out}");
     std::fs::remove_dir_all(&work).unwrap();
@@ -146,8 +182,14 @@ fn bad_input_is_reported_and_keeps_artifacts() {
     let cases: &[(&[&str], &str)] = &[
         (&["--set", "bar.diameterr=8 mm"], "diameterr"),
         (&["--set", "bar.diameter=8 MPa"], "bar.diameter"),
-        (&["--set", "specimen.adhesive_length=30 mm"], "specimen.adhesive_length"),
-        (&["--set", "materials.interface.mu=-1"], "materials.interface.mu"),
+        (
+            &["--set", "specimen.adhesive_length=30 mm"],
+            "specimen.adhesive_length",
+        ),
+        (
+            &["--set", "materials.interface.mu=-1"],
+            "materials.interface.mu",
+        ),
         (&["--set", "mesh.h_outer=0.1 mm"], "mesh.h_outer"),
         (&["--set", "loading.cutback=2"], "loading.cutback"),
         (&["--set", "bar.diameter"], "KEY=VALUE"),
@@ -162,11 +204,19 @@ fn bad_input_is_reported_and_keeps_artifacts() {
         assert!(!t.contains("panicked"), "{t}");
     }
     let o = ribbar(&["run", "specs/no-such-scene.yaml", "--work", w]);
-    assert!(!o.status.success() && text(&o).contains("no-such-scene.yaml"), "{}", text(&o));
+    assert!(
+        !o.status.success() && text(&o).contains("no-such-scene.yaml"),
+        "{}",
+        text(&o)
+    );
     let broken = work.join("broken.yaml");
     std::fs::write(&broken, "name: x\nbar: {kind: smooth, diameter: [\n").unwrap();
     let o = ribbar(&["run", broken.to_str().unwrap(), "--work", w]);
-    assert!(!o.status.success() && text(&o).contains("broken.yaml"), "{}", text(&o));
+    assert!(
+        !o.status.success() && text(&o).contains("broken.yaml"),
+        "{}",
+        text(&o)
+    );
     // gmsh missing: a clear message, and the published geometry untouched.
     let o = Command::new(env!("CARGO_BIN_EXE_ribbar"))
         .args(["run", TINY, "--work", w, "--set", "bar.diameter=6 mm"])
@@ -175,7 +225,11 @@ fn bad_input_is_reported_and_keeps_artifacts() {
         .output()
         .unwrap();
     assert!(!o.status.success());
-    assert!(text(&o).contains("/nonexistent/gmsh") && text(&o).contains("setup"), "{}", text(&o));
+    assert!(
+        text(&o).contains("/nonexistent/gmsh") && text(&o).contains("setup"),
+        "{}",
+        text(&o)
+    );
     assert_eq!(read(&geo), before);
     std::fs::remove_dir_all(&work).unwrap();
 }
@@ -187,21 +241,42 @@ fn material_driver_writes_csv() {
     let work = work_dir("material");
     std::fs::create_dir_all(&work).unwrap();
     let dir = repo().join("specs/material");
-    let mut files: Vec<_> = std::fs::read_dir(&dir).unwrap().filter_map(|e| e.ok()).map(|e| e.path()).collect();
+    let mut files: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .map(|e| e.path())
+        .collect();
     files.sort();
     let fczm = files
         .iter()
         .find(|p| read(p).contains("law: fczm"))
         .expect("a shipped FCZM test file");
     let out = work.join("point.csv");
-    ok(&["material", fczm.to_str().unwrap(), "-o", out.to_str().unwrap()]);
+    ok(&[
+        "material",
+        fczm.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+    ]);
     let csv = read(&out);
-    assert!(csv.starts_with("t,un,ut,uh,tn,tt,th,D"), "{}", &csv[..80.min(csv.len())]);
+    assert!(
+        csv.starts_with("t,un,ut,uh,tn,tt,th,D"),
+        "{}",
+        &csv[..80.min(csv.len())]
+    );
     assert!(csv.lines().count() > 10);
     let bad = work.join("bad.yaml");
-    std::fs::write(&bad, "law: fczm\nparameters: {ft: \"3 MPa\", mu: -1}\npath: [{t: 0}, {t: 1, un: 1e-5}]\n").unwrap();
+    std::fs::write(
+        &bad,
+        "law: fczm\nparameters: {ft: \"3 MPa\", mu: -1}\npath: [{t: 0}, {t: 1, un: 1e-5}]\n",
+    )
+    .unwrap();
     let o = ribbar(&["material", bad.to_str().unwrap()]);
-    assert!(!o.status.success() && text(&o).contains("bad.yaml"), "{}", text(&o));
+    assert!(
+        !o.status.success() && text(&o).contains("bad.yaml"),
+        "{}",
+        text(&o)
+    );
     std::fs::remove_dir_all(&work).unwrap();
 }
 
@@ -210,7 +285,12 @@ fn material_driver_writes_csv() {
 /// uninterrupted run (a killed solve resumes from its checkpoint).
 #[test]
 fn killed_runs_resume_to_the_same_curve() {
-    let slow = ["--set", "loading.max_step=4 um", "--set", "loading.initial_step=2 um"];
+    let slow = [
+        "--set",
+        "loading.max_step=4 um",
+        "--set",
+        "loading.initial_step=2 um",
+    ];
     let reference = work_dir("kill-ref");
     let r = reference.to_str().unwrap();
     let mut args = vec!["run", TINY, "--work", r];
@@ -249,12 +329,17 @@ fn killed_runs_resume_to_the_same_curve() {
         let scene = work.join("tiny-smooth");
         for json in ["geometry.json", "mesh.json", "solve.json", "summary.json"] {
             if let Ok(t) = std::fs::read_to_string(scene.join(json)) {
-                serde_json::from_str::<serde_json::Value>(&t).unwrap_or_else(|e| panic!("{json}: {e}"));
+                serde_json::from_str::<serde_json::Value>(&t)
+                    .unwrap_or_else(|e| panic!("{json}: {e}"));
             }
         }
         let out = ok(&args);
         resumed |= out.contains("resuming after step");
-        assert_eq!(read(&scene.join("curve.csv")), expected, "after a kill at {delay:?}");
+        assert_eq!(
+            read(&scene.join("curve.csv")),
+            expected,
+            "after a kill at {delay:?}"
+        );
         ok(&["clean", "--all", "--work", w]);
         std::fs::remove_dir_all(&scene).unwrap();
     }

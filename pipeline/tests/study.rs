@@ -6,7 +6,10 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 
 fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).parent().unwrap().to_path_buf()
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .unwrap()
+        .to_path_buf()
 }
 
 fn work_dir(name: &str) -> PathBuf {
@@ -16,8 +19,16 @@ fn work_dir(name: &str) -> PathBuf {
 }
 
 fn ok(cmd: &mut Command) -> String {
-    let o: Output = cmd.current_dir(repo()).stdin(Stdio::null()).output().expect("command runs");
-    let t = format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
+    let o: Output = cmd
+        .current_dir(repo())
+        .stdin(Stdio::null())
+        .output()
+        .expect("command runs");
+    let t = format!(
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
     assert!(o.status.success(), "{cmd:?} failed:\n{t}");
     t
 }
@@ -28,7 +39,11 @@ fn ribbar() -> Command {
 
 fn entries(dir: &Path) -> usize {
     std::fs::read_dir(dir)
-        .map(|d| d.filter_map(|e| e.ok()).filter(|e| !e.file_name().to_string_lossy().contains('.')).count())
+        .map(|d| {
+            d.filter_map(|e| e.ok())
+                .filter(|e| !e.file_name().to_string_lossy().contains('.'))
+                .count()
+        })
         .unwrap_or(0)
 }
 
@@ -39,14 +54,24 @@ fn entries(dir: &Path) -> usize {
 fn sweep_shares_upstream_stages_and_tabulates() {
     let work = work_dir("sweep");
     let w = work.to_str().unwrap();
-    ok(ribbar().args(["study", "tests/data/tiny-friction.yaml", "--work", w, "--jobs", "2"]));
+    ok(ribbar().args([
+        "study",
+        "tests/data/tiny-friction.yaml",
+        "--work",
+        w,
+        "--jobs",
+        "2",
+    ]));
     assert_eq!(entries(&work.join(".store/geometry")), 1);
     assert_eq!(entries(&work.join(".store/mesh")), 1);
     assert_eq!(entries(&work.join(".store/solve")), 2);
     let table = std::fs::read_to_string(work.join("tiny-friction/table.csv")).unwrap();
     let lines: Vec<&str> = table.lines().collect();
     assert_eq!(lines.len(), 3, "{table}");
-    assert!(lines[0].starts_with("case,materials.interface.mu"), "{table}");
+    assert!(
+        lines[0].starts_with("case,materials.interface.mu"),
+        "{table}"
+    );
     assert!(work.join("tiny-friction/table.md").is_file());
     assert!(work.join("tiny-friction/bond_slip.png").is_file());
     // Friction only adds shear: without it the post-peak bond stress is
@@ -56,7 +81,9 @@ fn sweep_shares_upstream_stages_and_tabulates() {
             &std::fs::read_to_string(work.join(case).join("summary.json")).unwrap(),
         )
         .unwrap();
-        s.pointer("/curve/residual_bond_stress").and_then(|v| v.as_f64()).unwrap()
+        s.pointer("/curve/residual_bond_stress")
+            .and_then(|v| v.as_f64())
+            .unwrap()
     };
     assert!(residual("tiny-friction--1") < residual("tiny-friction--0"));
     std::fs::remove_dir_all(&work).unwrap();
@@ -68,9 +95,19 @@ fn sweep_shares_upstream_stages_and_tabulates() {
 fn convergence_study_writes_gci_tables() {
     let work = work_dir("convergence");
     let w = work.to_str().unwrap();
-    ok(ribbar().args(["study", "tests/data/tiny-convergence.yaml", "--work", w, "--jobs", "2"]));
+    ok(ribbar().args([
+        "study",
+        "tests/data/tiny-convergence.yaml",
+        "--work",
+        w,
+        "--jobs",
+        "2",
+    ]));
     let md = std::fs::read_to_string(work.join("tiny-convergence/convergence.md")).unwrap();
-    assert!(md.contains("peak_bond_stress") && md.contains("GCI") || md.contains("gci"), "{md}");
+    assert!(
+        md.contains("peak_bond_stress") && md.contains("GCI") || md.contains("gci"),
+        "{md}"
+    );
     let csv = std::fs::read_to_string(work.join("tiny-convergence/convergence.csv")).unwrap();
     assert!(csv.lines().count() >= 4, "{csv}");
     std::fs::remove_dir_all(&work).unwrap();
@@ -88,13 +125,37 @@ fn snakemake_export_runs() {
     );
     let work = work_dir("snake");
     let w = work.to_str().unwrap();
-    ok(ribbar().args(["study", "tests/data/tiny-friction.yaml", "--work", w, "--export", "snakemake"]));
+    ok(ribbar().args([
+        "study",
+        "tests/data/tiny-friction.yaml",
+        "--work",
+        w,
+        "--export",
+        "snakemake",
+    ]));
     let snakefile = work.join("tiny-friction/Snakefile");
     let text = std::fs::read_to_string(&snakefile).unwrap();
-    assert!(text.contains("rule tiny_friction__0_mesh") && text.contains(" mesh "), "{text}");
+    assert!(
+        text.contains("rule tiny_friction__0_mesh") && text.contains(" mesh "),
+        "{text}"
+    );
     ok(Command::new(&snakemake)
-        .args(["-s", snakefile.to_str().unwrap(), "--cores", "2", "--directory", w])
-        .env("PATH", format!("{}:{}", snakemake.parent().unwrap().display(), std::env::var("PATH").unwrap_or_default())));
+        .args([
+            "-s",
+            snakefile.to_str().unwrap(),
+            "--cores",
+            "2",
+            "--directory",
+            w,
+        ])
+        .env(
+            "PATH",
+            format!(
+                "{}:{}",
+                snakemake.parent().unwrap().display(),
+                std::env::var("PATH").unwrap_or_default()
+            ),
+        ));
     for case in ["tiny-friction--0", "tiny-friction--1"] {
         assert!(work.join(case).join("summary.json").is_file(), "{case}");
     }
