@@ -48,10 +48,17 @@ impl BulkLaw for LinearElastic {
         _kind: TangentKind,
     ) -> Result<BulkResponse, LawError> {
         if !strain.iter().all(|v| v.is_finite()) {
-            return Err(LawError::NonFiniteInput { law: "elastic", what: "strain" });
+            return Err(LawError::NonFiniteInput {
+                law: "elastic",
+                what: "strain",
+            });
         }
         let tangent = self.stiffness();
-        Ok(BulkResponse { stress: tangent * strain, tangent, state: *committed })
+        Ok(BulkResponse {
+            stress: tangent * strain,
+            tangent,
+            state: *committed,
+        })
     }
 }
 
@@ -72,10 +79,17 @@ impl InterfaceLaw for ElasticInterface {
         _kind: TangentKind,
     ) -> Result<InterfaceResponse, LawError> {
         if !jump.iter().all(|v| v.is_finite()) {
-            return Err(LawError::NonFiniteInput { law: "elastic interface", what: "jump" });
+            return Err(LawError::NonFiniteInput {
+                law: "elastic interface",
+                what: "jump",
+            });
         }
         let tangent = self.elastic_stiffness();
-        Ok(InterfaceResponse { traction: tangent * jump, tangent, state: *committed })
+        Ok(InterfaceResponse {
+            traction: tangent * jump,
+            tangent,
+            state: *committed,
+        })
     }
 
     fn elastic_stiffness(&self) -> Matrix3<f64> {
