@@ -4,6 +4,13 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh --no-build
+# The linear benchmark's test compares ribbar's reaction force with CalculiX.
+if ! command -v ccx >/dev/null 2>&1; then
+  echo "test: installing calculix-ccx"
+  SUDO=""; [ "$(id -u)" -eq 0 ] || SUDO=sudo
+  $SUDO apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq calculix-ccx >/dev/null
+fi
 # The Snakemake export is tested against a real snakemake.
 if ! .tools/snakemake-venv/bin/snakemake --version >/dev/null 2>&1; then
   echo "test: installing snakemake into .tools/snakemake-venv"
