@@ -3,6 +3,7 @@
 pub mod amg;
 pub mod assembly;
 pub mod element;
+pub mod energy;
 pub mod fields;
 pub mod interface_element;
 pub mod laws;
