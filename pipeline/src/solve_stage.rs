@@ -2,12 +2,20 @@
 //! laws, runs the pull-out (resuming from the in-progress checkpoint when
 //! there is one), and writes `curve.csv`, `solve.json`, the requested VTU
 //! fields and the interface traction profiles along the bar.
+//!
+//! The energy balance of every converged step (`solve::energy`) is tracked
+//! alongside: `curve.csv` carries `w_ext,w_int,stored,dissipated` (J, whole
+//! specimen) after the six required columns, and `solve.json` an
+//! `energy_check` object. Its record is saved next to each checkpoint
+//! (before it), so a resumed run continues the sums and writes the same
+//! values as an uninterrupted one.
 
 use crate::stages::{Ctx, CHECKPOINT_FILE};
 use anyhow::Result;
 use geom::spec::NonAdhesive;
 use mesh::{InterfaceZone, Model};
 use solve::assembly::{ElementLaws, SharedBulkLaw, SharedInterfaceLaw};
+use solve::energy::{EnergyRow, EnergyTracker, ZoneRules, ENERGY_TOLERANCE};
 use solve::interface_element::{InterfaceKernel, INTERFACE_POINTS};
 use solve::laws::{InterfaceLaw, TangentKind};
 use solve::pullout::{
@@ -23,6 +31,21 @@ use std::time::{Duration, Instant};
 /// then costs at most ~5 % of the run whatever the model's size, and a
 /// resumed run repeats little work (every step on small models).
 const CHECKPOINT_COST_RATIO: u32 = 20;
+
+/// The energy rows up to the last checkpoint (JSON list of [`EnergyRow`]),
+/// in the in-progress directory; removed when the stage completes.
+const ENERGY_RECORD_FILE: &str = "energy_record.json";
+
+/// The reversible-energy rules of the scene's interface zones.
+pub fn zone_rules(scene: &crate::scene::Scene) -> ZoneRules {
+    let materials = &scene.materials;
+    let contact = materials.interface.contact_law();
+    let free = match scene.specimen.non_adhesive {
+        NonAdhesive::Free => None,
+        NonAdhesive::Contact => Some(&contact),
+    };
+    ZoneRules::from_laws(Some(&materials.interface.law), free)
+}
 
 pub fn element_laws(model: &Model, scene: &crate::scene::Scene) -> Result<ElementLaws> {
     let materials = &scene.materials;
@@ -52,14 +75,25 @@ pub fn element_laws(model: &Model, scene: &crate::scene::Scene) -> Result<Elemen
     })
 }
 
-fn curve_csv(rows: &[CurveRow]) -> Vec<u8> {
-    let mut out = b"step,u_imposed,force,fed,bond_stress,iterations\n".to_vec();
-    for r in rows {
-        let _ = writeln!(
+/// The curve; with `energy` (one row per step) the energy columns follow.
+fn curve_csv(rows: &[CurveRow], energy: Option<&[EnergyRow]>) -> Vec<u8> {
+    let energy = energy.filter(|e| e.len() == rows.len());
+    let mut out = b"step,u_imposed,force,fed,bond_stress,iterations".to_vec();
+    if energy.is_some() {
+        out.extend_from_slice(b",w_ext,w_int,stored,dissipated");
+    }
+    out.push(b'\n');
+    for (i, r) in rows.iter().enumerate() {
+        let _ = write!(
             out,
             "{},{:e},{:e},{:e},{:e},{}",
             r.step, r.u_imposed, r.force, r.fed, r.bond_stress, r.iterations
         );
+        if let Some(e) = energy {
+            let e = &e[i];
+            let _ = write!(out, ",{:e},{:e},{:e},{:e}", e.w_ext, e.w_int, e.stored, e.dissipated);
+        }
+        out.push(b'\n');
     }
     out
 }
@@ -146,6 +180,9 @@ struct StageObserver<'a> {
     peak: f64,
     error: Option<anyhow::Error>,
     cutbacks: Vec<String>,
+    /// The energy balance; `Err` says why it is not available.
+    energy: std::result::Result<EnergyTracker<'a>, String>,
+    energy_path: PathBuf,
 }
 
 impl StageObserver<'_> {
@@ -198,6 +235,11 @@ impl Observer for StageObserver<'_> {
             r.bond_stress / 1e6,
             r.iterations
         ));
+        if let Ok(tracker) = &mut self.energy {
+            if let Err(e) = tracker.step(r.u_imposed, r.force, view.u, view.states) {
+                self.energy = Err(format!("step {}: {e}", r.step));
+            }
+        }
         if self.error.is_some() {
             return;
         }
@@ -214,9 +256,19 @@ impl Observer for StageObserver<'_> {
             && self.last_checkpoint.elapsed() >= self.checkpoint_cost * CHECKPOINT_COST_RATIO
         {
             let started = Instant::now();
-            result = (view.checkpoint)()
-                .save(&self.checkpoint_path)
-                .map_err(Into::into);
+            // The record first: a checkpoint never has more steps than it.
+            if let Ok(tracker) = &self.energy {
+                result = serde_json::to_vec(tracker.rows())
+                    .map_err(anyhow::Error::from)
+                    .and_then(|bytes| {
+                        crate::store::write_atomic(&self.energy_path, &bytes).map_err(Into::into)
+                    });
+            }
+            result = result.and_then(|_| {
+                (view.checkpoint)()
+                    .save(&self.checkpoint_path)
+                    .map_err(Into::into)
+            });
             self.checkpoint_cost = started.elapsed();
             self.last_checkpoint = Instant::now();
         }
@@ -279,6 +331,12 @@ pub fn run(ctx: &Ctx, mesh_dir: &Path, out: &Path) -> Result<()> {
         }
     }
     crate::store::write_atomic(&profile_path, &profile)?;
+    let energy_path = out.join(ENERGY_RECORD_FILE);
+    let rules = zone_rules(ctx.scene);
+    let energy = match &checkpoint {
+        None => EnergyTracker::new(&model, &laws, rules).map_err(|e| e.to_string()),
+        Some(cp) => resume_energy(&model, &laws, rules, cp, &energy_path),
+    };
     let mut observer = StageObserver {
         ctx,
         laws: &laws,
@@ -290,6 +348,8 @@ pub fn run(ctx: &Ctx, mesh_dir: &Path, out: &Path) -> Result<()> {
         peak: peak_so_far,
         error: None,
         cutbacks: Vec::new(),
+        energy,
+        energy_path: energy_path.clone(),
     };
     let outcome = solve::pullout::solve_pullout(
         &model,
@@ -340,18 +400,38 @@ pub fn run(ctx: &Ctx, mesh_dir: &Path, out: &Path) -> Result<()> {
             observer.write_fields("end", &report, &view)?;
         }
     }
-    crate::store::write_atomic(&out.join("curve.csv"), &curve_csv(&result.rows))?;
+    let energy_rows = observer.energy.as_ref().ok().map(|t| t.rows().to_vec());
+    let energy_check = match (&observer.energy, &energy_rows) {
+        (Ok(_), Some(rows)) if rows.len() == result.rows.len() => {
+            let check = solve::energy::check(rows, ENERGY_TOLERANCE);
+            if !check.passed {
+                ctx.printer.line(&format!(
+                    "solve: energy check failed: imbalance {:.3e} (step {}), smallest dissipation increment {:.3e} (tolerance {:.0e} of W_ext)",
+                    check.max_relative_imbalance, check.step_of_max_imbalance, check.min_dissipation_increment, check.tolerance
+                ));
+            }
+            let mut v = serde_json::to_value(&check)?;
+            v["available"] = true.into();
+            v["final"] = serde_json::to_value(rows.last())?;
+            v
+        }
+        (Err(why), _) => serde_json::json!({"available": false, "reason": why}),
+        _ => serde_json::json!({"available": false, "reason": "energy rows do not match the curve"}),
+    };
+    crate::store::write_atomic(&out.join("curve.csv"), &curve_csv(&result.rows, energy_rows.as_deref()))?;
     let solve_json = serde_json::json!({
         "summary": result.summary,
         "completed": stopped.is_none(),
         "stopped": stopped,
         "cutbacks": observer.cutbacks,
+        "energy_check": energy_check,
     });
     crate::store::write_atomic(
         &out.join("solve.json"),
         &serde_json::to_vec_pretty(&solve_json)?,
     )?;
     let _ = std::fs::remove_file(&checkpoint_path);
+    let _ = std::fs::remove_file(&energy_path);
     if let Some(why) = &stopped {
         // The converged part is a result like any other (a rerun with the
         // same inputs would stop at the same step): it is committed, post
@@ -359,4 +439,25 @@ pub fn run(ctx: &Ctx, mesh_dir: &Path, out: &Path) -> Result<()> {
         ctx.printer.line(&format!("solve: stopped early: {why}"));
     }
     Ok(())
+}
+
+/// The energy tracker of a resumed run: the saved record of the steps up to
+/// the checkpoint (it may hold more, saved just before a checkpoint that was
+/// not written), continued from the checkpoint's state.
+fn resume_energy<'a>(
+    model: &'a Model,
+    laws: &'a ElementLaws,
+    rules: ZoneRules,
+    cp: &Checkpoint,
+    path: &Path,
+) -> std::result::Result<EnergyTracker<'a>, String> {
+    let bytes = std::fs::read(path).map_err(|e| format!("resumed without the energy record ({e})"))?;
+    let mut rows: Vec<EnergyRow> =
+        serde_json::from_slice(&bytes).map_err(|e| format!("unreadable energy record: {e}"))?;
+    if rows.len() < cp.rows.len() {
+        return Err(format!("the energy record holds {} steps, the checkpoint {}", rows.len(), cp.rows.len()));
+    }
+    rows.truncate(cp.rows.len());
+    let force = cp.rows.last().map_or(0.0, |r| r.force);
+    EnergyTracker::resume(model, laws, rules, &cp.u, &cp.states, rows, cp.u_imposed, force).map_err(|e| e.to_string())
 }

@@ -84,7 +84,10 @@ fn run_writes_every_artifact() {
         assert!(scene.join(f).is_file(), "missing {f}");
     }
     let curve = read(&scene.join("curve.csv"));
-    assert!(curve.starts_with("step,u_imposed,force,fed,bond_stress,iterations\n"));
+    // The six required columns, then the energy balance's (issue 7).
+    assert!(curve.starts_with(
+        "step,u_imposed,force,fed,bond_stress,iterations,w_ext,w_int,stored,dissipated\n"
+    ));
     assert!(curve.lines().count() > 5, "{curve}");
     let summary: serde_json::Value =
         serde_json::from_str(&read(&scene.join("summary.json"))).unwrap();
