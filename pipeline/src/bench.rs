@@ -245,22 +245,30 @@ fn smooth80_spec() -> PathBuf {
 }
 
 /// Meshes the smooth-80 variant and returns (scene, model path).
-fn mesh_variant(args: &BenchArgs, symmetry: &str, printer: &Printer) -> Result<(Scene, PathBuf)> {
+fn mesh_variant(
+    args: &BenchArgs,
+    work: &Path,
+    symmetry: &str,
+    printer: &Printer,
+) -> Result<(Scene, PathBuf)> {
     let mut overrides = args.overrides.clone();
     overrides.push(format!("specimen.symmetry={symmetry}"));
     overrides.push(format!("name=bench-linear-{symmetry}"));
     let scene = Scene::load(&smooth80_spec(), &overrides)?;
-    run_scene(&scene, &args.work, &["geometry", "mesh"], printer)?;
-    let model = args.work.join(&scene.name).join(mesh::MODEL_FILE);
+    run_scene(&scene, work, &["geometry", "mesh"], printer)?;
+    let model = work.join(&scene.name).join(mesh::MODEL_FILE);
     Ok((scene, model))
 }
 
 fn linear(args: &BenchArgs, printer: &Printer) -> Result<ExitCode> {
+    // The stages hand paths to gmsh, which runs in another directory.
+    let work = std::path::absolute(&args.work)
+        .with_context(|| format!("work directory {}", args.work.display()))?;
     let mut rows: Vec<Row> = Vec::new();
     let mut notes: Vec<String> = Vec::new();
     let mut ccx_force = None;
     for symmetry in ["full", "quarter"] {
-        let (scene, model_path) = mesh_variant(args, symmetry, printer)?;
+        let (scene, model_path) = mesh_variant(args, &work, symmetry, printer)?;
         let (concrete, steel) = elastic_materials(&scene);
         let h = scene.mesh.h_interface;
         let label = if symmetry == "full" {
@@ -307,7 +315,7 @@ fn linear(args: &BenchArgs, printer: &Printer) -> Result<ExitCode> {
             let model = Model::load(&model_path)?;
             let problem = PerfectBond::from_model(&model, U_IMPOSED)?;
             drop(model);
-            let dir = args.work.join("bench-linear-ccx");
+            let dir = work.join("bench-linear-ccx");
             match ccx::run(&problem, &concrete, &steel, &dir, TIMEOUT, printer) {
                 Ok(Some(c)) => {
                     ccx_force = Some(c.reaction);
