@@ -33,9 +33,8 @@ pub fn run(args: &BenchArgs, printer: &Printer) -> Result<ExitCode> {
             }
             linear(args, printer)
         }
-        BenchKind::MeshSeries | BenchKind::SolverSettings => {
-            bail!("bench {:?}: not implemented yet", args.kind)
-        }
+        BenchKind::MeshSeries => crate::bench_series::mesh_series(args, printer),
+        BenchKind::SolverSettings => crate::bench_series::solver_settings(args, printer),
     }
 }
 

@@ -84,6 +84,9 @@ pub struct BenchArgs {
     /// Override a spec key of the benchmark's scenes (repeatable).
     #[arg(long = "set", value_name = "KEY=VALUE")]
     pub overrides: Vec<String>,
+    /// Small scenes and coarse meshes (seconds; for tests and smoke runs).
+    #[arg(long)]
+    pub quick: bool,
 }
 
 #[derive(Debug, Args)]

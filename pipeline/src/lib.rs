@@ -2,6 +2,7 @@
 //! content-addressed store, the four stages, studies and post-processing.
 
 pub mod bench;
+pub mod bench_series;
 pub mod cli;
 pub mod commands;
 pub mod outputs;
