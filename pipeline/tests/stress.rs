@@ -1,0 +1,79 @@
+//! Reduced numerical-stability sweep (issue 7): eight extreme-but-valid
+//! parameter sets on the tiny smooth scene, each run by `ribbar study` in a
+//! child process, then checked by `bench_series::stress_report`.
+
+use pipeline::bench_series::stress_report;
+use std::path::PathBuf;
+use std::process::Command;
+
+fn repo() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+/// Issue 7 stress tests: for δ_s, μ, ζ, λ_0 at their extremes and a yielding
+/// bar, no case panics or writes NaN/inf, every case that does not reach
+/// the end says why, its converged steps are kept, and the energy balance
+/// holds on the converged steps (|W_ext − W_int| ≤ 1 % W_ext, dissipation
+/// non-decreasing).
+#[test]
+fn extreme_parameters_never_panic_or_mislead() {
+    let work = std::env::temp_dir().join(format!("ribbar-stress-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&work);
+    let study = repo().join("tests/data/stress-mini.yaml");
+    let out = Command::new(env!("CARGO_BIN_EXE_ribbar"))
+        .args([
+            "study",
+            study.to_str().unwrap(),
+            "--work",
+            work.to_str().unwrap(),
+            "-j",
+            "2",
+            "-q",
+        ])
+        .current_dir(repo())
+        .output()
+        .unwrap();
+    // A stopped case makes the study exit non-zero; the report checks why.
+    let table = work.join("stress-mini.md");
+    let cases = stress_report(&study, &work, &table, "test").unwrap();
+    let log = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(cases.len(), 8);
+    for c in &cases {
+        assert!(!c.panicked, "{}: panicked ({log})", c.name);
+        assert!(!c.non_finite, "{}: non-finite value in curve.csv", c.name);
+        assert!(
+            c.failure.is_none(),
+            "{}: failed before solving: {:?}",
+            c.name,
+            c.failure
+        );
+        assert!(
+            c.record.completed || c.record.reason.is_some(),
+            "{}: stopped without a reason",
+            c.name
+        );
+        assert!(
+            !c.record.curve.is_empty(),
+            "{}: no converged step kept",
+            c.name
+        );
+        assert_eq!(
+            c.record.energy_passed,
+            Some(true),
+            "{}: energy check (imbalance {:?})",
+            c.name,
+            c.record.energy_imbalance
+        );
+    }
+    // The yielding case reaches the plastic range: its force is capped by
+    // σ_y A = 5 MPa × π (4 mm)² ≈ 251 N, below the unyielded peak (≈ 390 N).
+    let yielding = &cases[7].record;
+    let peak_force = yielding.curve.iter().map(|r| r.force).fold(0.0, f64::max);
+    assert!(
+        peak_force < 1.1 * 5e6 * std::f64::consts::PI * 16e-6,
+        "peak force {peak_force} N"
+    );
+    let text = std::fs::read_to_string(&table).unwrap();
+    assert!(text.contains("| stress-mini--7 |"), "{text}");
+    std::fs::remove_dir_all(&work).unwrap();
+}

@@ -1,0 +1,16 @@
+#!/usr/bin/env bash
+# Numerical-stability stress sweep (issue 7): runs the study
+# specs/studies/stress-sweep.yaml (each case a child `ribbar run`, so a
+# failing case cannot take the others down), then builds docs/stress-sweep.md
+# from the cases' curve.csv, solve.json and logs.
+# Usage: scripts/stress-sweep.sh [WORK_DIR] [JOBS]
+set -u
+cd "$(dirname "$0")/.."
+WORK="${1:-ribbar-work}"
+JOBS="${2:-2}"
+STUDY=specs/studies/stress-sweep.yaml
+cargo build -p pipeline --bin ribbar --example stress_report || exit 1
+# The study exits non-zero when cases stop early; the table says why.
+./target/debug/ribbar study "$STUDY" --work "$WORK" -j "$JOBS" || true
+./target/debug/examples/stress_report "$STUDY" "$WORK" docs/stress-sweep.md \
+  "scripts/stress-sweep.sh $WORK $JOBS"
