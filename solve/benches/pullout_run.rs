@@ -18,12 +18,24 @@ use solve::spec::materials::RawMaterials;
 use solve::spec::solver::{RawLoading, RawSolver};
 use std::sync::Arc;
 
-struct Print;
+/// Prints each step; the GMRES iterations and factorisations of a step come
+/// from the running summary (read through a checkpoint, a few ms per step).
+#[derive(Default)]
+struct Print {
+    krylov: usize,
+    factorisations: usize,
+}
 impl Observer for Print {
-    fn step_converged(&mut self, r: &StepReport, _: &CommittedView<'_>) {
+    fn step_converged(&mut self, r: &StepReport, v: &CommittedView<'_>) {
         let w = r.times;
+        let s = (v.checkpoint)().summary;
+        let (kr, fa) = (
+            s.krylov_iterations - self.krylov,
+            s.factorisations - self.factorisations,
+        );
+        (self.krylov, self.factorisations) = (s.krylov_iterations, s.factorisations);
         println!(
-            "step {:>4} u {:.4} mm FED {:.4} mm σ_mb {:.3} MPa it {:>2} h {:.2} µm | {:.2} s (const {:.2} asm {:.2} fact {:.2} solve {:.2})",
+            "step {:>4} u {:.4} mm FED {:.4} mm σ_mb {:.3} MPa it {:>2} gmres {kr:>3} fact {fa} h {:.2} µm | {:.2} s (const {:.2} asm {:.2} fact {:.2} solve {:.2})",
             r.row.step,
             r.row.u_imposed * 1e3,
             r.row.fed * 1e3,
@@ -105,7 +117,14 @@ fn main() {
         model.tets.len(),
         model.interfaces.len()
     );
-    let res = solve_pullout(&model, &laws, &loading, &settings, None, &mut Print);
+    let res = solve_pullout(
+        &model,
+        &laws,
+        &loading,
+        &settings,
+        None,
+        &mut Print::default(),
+    );
     let summary = match &res {
         Ok(r) => r.summary.clone(),
         Err(solve::pullout::SolveError::Stalled { partial, .. }) => {

@@ -26,7 +26,7 @@ use crate::assembly::{AssemblyError, ElementLaws, EvalTimings, States, System};
 use crate::interface_element::INTERFACE_POINTS;
 use crate::laws::TangentKind;
 use crate::linear::{dot, gmres, norm, pcg, Cholesky, LinearError, SplitMatrix, SymLower};
-use crate::spec::solver::{LinearSolverKind, Loading, SolverSettings};
+use crate::spec::solver::{Forcing, LinearSolverKind, Loading, Predictor, SolverSettings};
 use mesh::{Model, Symmetry};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
@@ -181,6 +181,25 @@ pub struct Checkpoint {
     pub states: States,
     pub rows: Vec<CurveRow>,
     pub summary: Summary,
+    /// The matrix whose factor preconditions the next linear solves (PCG
+    /// and GMRES keep one across steps); a resumed run factorises exactly
+    /// these values, so its iterates equal the uninterrupted run's bit for
+    /// bit. `None` when no factor is kept (Cholesky mode, or none yet).
+    pub preconditioner: Option<PreconditionerState>,
+    /// Global displacement increment of the last converged step (m; empty
+    /// before the first), for the extrapolating predictor.
+    pub last_increment: Vec<f64>,
+    /// Size of the last converged step, m (0 before the first).
+    pub last_step: f64,
+}
+
+/// The kept preconditioner of a run: the lower-triangle values (N/m) that
+/// were factorised, and whether the solver had decided to refactorise at
+/// its next correction.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PreconditionerState {
+    pub values: Vec<f64>,
+    pub refactor: bool,
 }
 
 /// A checkpoint file that cannot be written or read.
@@ -234,7 +253,7 @@ impl Checkpoint {
     }
 }
 
-const CHECKPOINT_MAGIC: u64 = 0x7269_6262_6172_0001;
+const CHECKPOINT_MAGIC: u64 = 0x7269_6262_6172_0002;
 
 /// A finished (or partial) run.
 #[derive(Debug, Clone, PartialEq)]
@@ -474,7 +493,8 @@ struct LinearState {
     /// Transposed entries of the consistent tangent (see
     /// `System::evaluate_full`); empty for symmetric tangent kinds.
     upper: Vec<f64>,
-    /// Lower values of the matrix factorised as GMRES preconditioner.
+    /// Lower values of the matrix held in `chol` when it is kept across
+    /// iterations (PCG, GMRES preconditioner); saved in checkpoints.
     preconditioner: Vec<f64>,
     /// The preconditioner is missing or has become poor: factorise anew.
     refactor: bool,
@@ -534,14 +554,16 @@ pub fn run(
         } else {
             Vec::new()
         },
-        preconditioner: if settings.linear_solver == LinearSolverKind::Gmres {
-            vec![0.0; system.nnz()]
-        } else {
+        preconditioner: if settings.linear_solver == LinearSolverKind::Cholesky {
             Vec::new()
+        } else {
+            vec![0.0; system.nnz()]
         },
         refactor: true,
     };
 
+    let mut last_inc: Vec<f64> = Vec::new();
+    let mut last_h = 0.0;
     let (mut u, mut committed, mut rows, mut summary, mut lambda, mut h) = match checkpoint {
         Some(cp) => {
             if cp.n_nodes != model.nodes.len()
@@ -561,6 +583,24 @@ pub fn run(
                     model.interfaces.len()
                 )));
             }
+            if let Some(p) = cp.preconditioner {
+                // Rebuild the uninterrupted run's factor from its values
+                // (a restore, not counted among the run's factorisations).
+                if p.values.len() == lin.preconditioner.len() {
+                    let t = Instant::now();
+                    lin.chol.factorize(&p.values)?;
+                    wall.factorisation += t.elapsed().as_secs_f64();
+                    lin.preconditioner = p.values;
+                    lin.refactor = p.refactor;
+                }
+            }
+            if cp.last_increment.len() == n_total {
+                last_inc = cp.last_increment;
+                last_h = cp.last_step;
+            }
+            lin.factorisations = cp.summary.factorisations;
+            lin.pcg_iterations = cp.summary.pcg_iterations;
+            lin.krylov_iterations = cp.summary.krylov_iterations;
             (
                 cp.u,
                 cp.states,
@@ -589,20 +629,35 @@ pub fn run(
     let mut values = vec![0.0; system.nnz()];
     let done_eps = 1e-9 * loading.u_final;
 
-    let make_cp =
-        |u: &[f64], states: &States, rows: &[CurveRow], summary: &Summary, lambda: f64, h: f64| {
-            Checkpoint {
-                n_nodes: model.nodes.len(),
-                n_tets: model.tets.len(),
-                n_interfaces: model.interfaces.len(),
-                u_imposed: lambda,
-                next_step: h,
-                u: u.to_vec(),
-                states: states.clone(),
-                rows: rows.to_vec(),
-                summary: summary.clone(),
-            }
-        };
+    let make_cp = |u: &[f64],
+                   states: &States,
+                   rows: &[CurveRow],
+                   summary: &Summary,
+                   lambda: f64,
+                   h: f64,
+                   lin: &LinearState,
+                   last_inc: &[f64],
+                   last_h: f64| {
+        Checkpoint {
+            n_nodes: model.nodes.len(),
+            n_tets: model.tets.len(),
+            n_interfaces: model.interfaces.len(),
+            u_imposed: lambda,
+            next_step: h,
+            u: u.to_vec(),
+            states: states.clone(),
+            rows: rows.to_vec(),
+            summary: summary.clone(),
+            preconditioner: (settings.linear_solver != LinearSolverKind::Cholesky
+                && lin.chol.is_factored())
+            .then(|| PreconditionerState {
+                values: lin.preconditioner.clone(),
+                refactor: lin.refactor,
+            }),
+            last_increment: last_inc.to_vec(),
+            last_step: last_h,
+        }
+    };
     let finish = |summary: &mut Summary, wall: &WallTimes, lin: &LinearState| {
         let mut w = previous_wall;
         let mut now = *wall;
@@ -625,6 +680,13 @@ pub fn run(
         let mut step_wall = WallTimes::default();
         let t_step = Instant::now();
         let mut u_trial = u.clone();
+        if settings.predictor == Predictor::Extrapolate && last_h > 0.0 {
+            let s = h_try / last_h;
+            u_trial
+                .iter_mut()
+                .zip(&last_inc)
+                .for_each(|(v, d)| *v += s * d);
+        }
         dirichlet.apply(target, &mut u_trial);
         let attempt = newton(
             &system,
@@ -635,6 +697,7 @@ pub fn run(
             &mut u_trial,
             &mut f_int,
             &mut values,
+            h_try,
             &mut lin,
             &mut step_wall,
         );
@@ -646,6 +709,9 @@ pub fn run(
         summary.krylov_iterations = lin.krylov_iterations;
         match attempt.failure {
             None => {
+                last_inc.clear();
+                last_inc.extend(u_trial.iter().zip(&u).map(|(a, b)| a - b));
+                last_h = h_try;
                 u = u_trial;
                 std::mem::swap(&mut committed, &mut trial);
                 lambda = target;
@@ -671,7 +737,11 @@ pub fn run(
                     h = h_try;
                 }
                 finish(&mut summary, &wall, &lin);
-                let cp = || make_cp(&u, &committed, &rows, &summary, lambda, h);
+                let cp = || {
+                    make_cp(
+                        &u, &committed, &rows, &summary, lambda, h, &lin, &last_inc, last_h,
+                    )
+                };
                 let view = CommittedView {
                     model,
                     laws,
@@ -703,7 +773,9 @@ pub fn run(
                 });
                 if h_try <= loading.min_step * (1.0 + 1e-12) {
                     finish(&mut summary, &wall, &lin);
-                    let last = make_cp(&u, &committed, &rows, &summary, lambda, h_try);
+                    let last = make_cp(
+                        &u, &committed, &rows, &summary, lambda, h_try, &lin, &last_inc, last_h,
+                    );
                     return Err(SolveError::Stalled {
                         step,
                         u_imposed: target,
@@ -722,7 +794,9 @@ pub fn run(
         }
     }
     finish(&mut summary, &wall, &lin);
-    let last = make_cp(&u, &committed, &rows, &summary, lambda, h);
+    let last = make_cp(
+        &u, &committed, &rows, &summary, lambda, h, &lin, &last_inc, last_h,
+    );
     Ok(RunResult {
         rows,
         summary,
@@ -767,7 +841,9 @@ fn diagnose(committed: &States, trial: &States) -> String {
 ///
 /// Convergence needs both criteria of SPEC §6 after at least one
 /// correction: ‖r‖ ≤ tol_r·‖reactions‖ and |Δu_k·r_{k−1}| ≤ tol_e·E_ref,
-/// where E_ref is the largest |Δu·r| of the step's corrections. A reference
+/// where E_ref is the largest |Δu·r| of the step's corrections, or the work
+/// scale ‖reactions‖·h of the step (size h) when larger: after an exact
+/// predictor every correction is round-off, relative to itself. A reference
 /// taken from the first correction alone made tiny steps unconvergeable:
 /// after a cut-back to a step of a few nm, the first correction carries only
 /// the tiny imposed increment, and the leftover imbalance of the previous
@@ -782,6 +858,7 @@ fn newton(
     u: &mut [f64],
     f_int: &mut [f64],
     values: &mut [f64],
+    step_size: f64,
     lin: &mut LinearState,
     wall: &mut WallTimes,
 ) -> Attempt {
@@ -800,6 +877,9 @@ fn newton(
     // Correction of the previous iteration (for the line search).
     let mut prev: Option<(Vec<f64>, f64)> = None;
     let mut first_norm = 0.0;
+    // Forcing term of the last correction and the residual it started from.
+    let mut eta_prev = 0.0f64;
+    let mut r_prev = 0.0f64;
     for k in 0..=settings.max_iterations {
         let mut eval = |u: &[f64],
                         trial: &mut States,
@@ -830,12 +910,18 @@ fn newton(
         }
         residual(dofs, f_int, &mut r);
         // Line search: if the full correction overshot the energy minimum
-        // along its direction, go back to the secant root.
+        // along its direction and did not reduce the residual, go back to
+        // the secant root. The tangent is unsymmetric (no potential), so a
+        // shorter step is kept only if its residual is smaller than the full
+        // step's; otherwise the full step stands (short steps that reduce
+        // nothing stalled Newton at a constant residual).
         if let (true, Some((d, g0))) = (settings.line_search, prev.as_ref()) {
             let mut s = 1.0;
             let mut g = dot(d, &r);
+            let full_norm = norm(&r);
+            let mut best = (1.0, full_norm);
             let mut tries = 0;
-            while g < 0.0 && g.abs() > 0.5 * g0 && tries < 4 {
+            while g < 0.0 && g.abs() > 0.5 * g0 && full_norm > r_prev && tries < 4 {
                 let s_new = (s * g0 / (g0 - g)).clamp(0.1 * s, 0.9 * s);
                 dofs.scatter_add(d, s_new - s, u);
                 s = s_new;
@@ -847,8 +933,24 @@ fn newton(
                     );
                 }
                 residual(dofs, f_int, &mut r);
+                let n = norm(&r);
+                if n < best.1 {
+                    best = (s, n);
+                }
                 g = dot(d, &r);
                 tries += 1;
+            }
+            if s != best.0 {
+                dofs.scatter_add(d, best.0 - s, u);
+                s = best.0;
+                if let Err(why) = eval(u, trial, f_int, values, &mut lin.upper) {
+                    return fail(
+                        history,
+                        k,
+                        format!("constitutive failure in line search: {why}"),
+                    );
+                }
+                residual(dofs, f_int, &mut r);
             }
             last_energy *= s;
         }
@@ -864,7 +966,7 @@ fn newton(
         }
         if k > 0
             && rnorm <= settings.residual_tolerance * scale
-            && last_energy <= settings.energy_tolerance * energy_ref
+            && last_energy <= settings.energy_tolerance * energy_ref.max(scale * step_size)
         {
             return Attempt {
                 iterations: k,
@@ -874,6 +976,26 @@ fn newton(
         }
         if k == settings.max_iterations {
             break;
+        }
+        // Stagnation (switching stick/slip or loading/unloading points that
+        // Newton cannot settle): the last 4 residuals all above half the
+        // best before them. A cut-back now is cheaper than more iterations.
+        if k >= 8 {
+            let best_before = history[..k - 3]
+                .iter()
+                .copied()
+                .fold(f64::INFINITY, f64::min);
+            if history[k - 3..].iter().all(|&v| v > 0.5 * best_before) {
+                return fail(
+                    history,
+                    k,
+                    format!(
+                        "stagnating at relative residual {:e}. {}",
+                        rnorm / scale,
+                        diagnose(committed, trial)
+                    ),
+                );
+            }
         }
         if rnorm > 1e8 * first_norm.max(scale) {
             return fail(
@@ -885,8 +1007,11 @@ fn newton(
                 ),
             );
         }
+        let eta = forcing_term(settings, k, rnorm, r_prev, eta_prev, scale);
+        eta_prev = eta;
+        r_prev = rnorm;
         if let Err(e) = solve_correction(
-            system, laws, settings, committed, trial, u, f_int, values, &r, &mut du, lin, wall,
+            system, laws, settings, committed, trial, u, f_int, values, &r, &mut du, eta, lin, wall,
         ) {
             return fail(
                 history,
@@ -917,6 +1042,40 @@ fn newton(
         diagnose(committed, trial)
     );
     fail(history, settings.max_iterations, why)
+}
+
+/// GMRES relative tolerance of correction `k` (see [`Forcing`]); `rnorm`
+/// is the current residual norm, `r_prev` the one the previous correction
+/// started from (N), `scale` the force scale of the residual criterion.
+fn forcing_term(
+    settings: &SolverSettings,
+    k: usize,
+    rnorm: f64,
+    r_prev: f64,
+    eta_prev: f64,
+    scale: f64,
+) -> f64 {
+    const ETA_MAX: f64 = 0.1;
+    let floor = settings.krylov_tolerance;
+    match settings.forcing {
+        Forcing::Fixed => floor,
+        Forcing::EisenstatWalker => {
+            let eta = if k == 0 || r_prev <= 0.0 {
+                ETA_MAX
+            } else {
+                let ratio = rnorm / r_prev;
+                let mut e = 0.9 * ratio * ratio;
+                // Safeguard against a sudden drop after a lucky iterate.
+                let carried = 0.9 * eta_prev * eta_prev;
+                if carried > 0.1 {
+                    e = e.max(carried);
+                }
+                e
+            };
+            let _ = scale;
+            eta.min(ETA_MAX).max(floor)
+        }
+    }
 }
 
 /// r = −f_int on the free DOFs (no external loads besides the Dirichlet values).
@@ -996,6 +1155,7 @@ fn solve_correction(
     values: &mut [f64],
     r: &[f64],
     du: &mut [f64],
+    eta: f64,
     lin: &mut LinearState,
     wall: &mut WallTimes,
 ) -> Result<(), LinearError> {
@@ -1005,7 +1165,7 @@ fn solve_correction(
         let lower: &[f64] = values;
         let up: &[f64] = if upper.is_empty() { lower } else { &upper };
         let out = newton_krylov(
-            system, laws, settings, committed, trial, u, f_int, lower, up, r, du, lin, wall,
+            system, laws, settings, committed, trial, u, f_int, lower, up, r, du, eta, lin, wall,
         );
         lin.upper = upper;
         return out;
@@ -1047,6 +1207,10 @@ fn solve_correction(
         lin.factorisations += 1;
         res?;
     }
+    if settings.linear_solver == LinearSolverKind::Pcg {
+        // The factor preconditions later steps: keep what it was built from.
+        lin.preconditioner.copy_from_slice(values);
+    }
     let t = Instant::now();
     du.copy_from_slice(r);
     let out = lin.chol.solve_in_place(du);
@@ -1073,6 +1237,7 @@ fn newton_krylov(
     upper: &[f64],
     r: &[f64],
     du: &mut [f64],
+    eta: f64,
     lin: &mut LinearState,
     wall: &mut WallTimes,
 ) -> Result<(), LinearError> {
@@ -1085,14 +1250,7 @@ fn newton_krylov(
     let half = settings.krylov_max_iterations / 2;
     let try_gmres = |lin: &mut LinearState, wall: &mut WallTimes, du: &mut [f64]| {
         let t = Instant::now();
-        let res = gmres(
-            a,
-            &lin.chol,
-            r,
-            du,
-            settings.krylov_tolerance,
-            settings.krylov_max_iterations,
-        );
+        let res = gmres(a, &lin.chol, r, du, eta, settings.krylov_max_iterations);
         wall.solve += t.elapsed().as_secs_f64();
         match res {
             Ok(info) => {

@@ -178,6 +178,36 @@ pub struct RawSolver {
     pub pcg_max_iterations: Option<usize>,
     pub krylov_tolerance: Option<f64>,
     pub krylov_max_iterations: Option<usize>,
+    pub forcing: Option<Forcing>,
+    pub predictor: Option<Predictor>,
+}
+
+/// How the GMRES tolerance of each Newton correction (the forcing term η)
+/// is chosen.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum Forcing {
+    /// η = `krylov_tolerance` for every correction.
+    Fixed,
+    /// Eisenstat–Walker (1996) choice 2: η_k = 0.9 (‖r_k‖/‖r_{k−1}‖)², kept
+    /// ≥ 0.9 η_{k−1}² when that is > 0.1, capped at 0.1, and floored at
+    /// `krylov_tolerance`; the first correction of a step uses 0.1. Loose
+    /// solves far from the solution, tight ones near it.
+    #[default]
+    EisenstatWalker,
+}
+
+/// First iterate of a load step.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum Predictor {
+    /// The last converged displacement with the new Dirichlet values.
+    Constant,
+    /// The last converged displacement plus the last step's increment scaled
+    /// to the new step size (linear extrapolation along the path), with the
+    /// new Dirichlet values.
+    #[default]
+    Extrapolate,
 }
 
 /// Newton settings, resolved.
@@ -205,6 +235,10 @@ pub struct SolverSettings {
     /// GMRES iterations before the preconditioner is refactorised; a solve
     /// that needed more than half of them refactorises at the next iteration.
     pub krylov_max_iterations: usize,
+    /// Choice of the GMRES tolerance per correction.
+    pub forcing: Forcing,
+    /// First iterate of a load step.
+    pub predictor: Predictor,
 }
 
 impl Default for SolverSettings {
@@ -221,6 +255,8 @@ impl Default for SolverSettings {
             pcg_max_iterations: 20,
             krylov_tolerance: 1e-3,
             krylov_max_iterations: 40,
+            forcing: Forcing::EisenstatWalker,
+            predictor: Predictor::Extrapolate,
         }
     }
 }
@@ -288,6 +324,8 @@ impl RawSolver {
                 self.krylov_max_iterations,
                 d.krylov_max_iterations,
             )?,
+            forcing: self.forcing.unwrap_or(d.forcing),
+            predictor: self.predictor.unwrap_or(d.predictor),
         })
     }
 }
