@@ -247,6 +247,12 @@ impl Gmsh {
         let py = self.python.as_ref().ok_or_else(|| GmshError::NoPythonApi {
             program: self.program.clone(),
         })?;
+        // The child runs in `workdir`: a relative `workdir` would be applied
+        // twice to a relative script path.
+        let workdir = &std::path::absolute(workdir).map_err(|source| GmshError::Io {
+            path: workdir.to_path_buf(),
+            source,
+        })?;
         let file = workdir.join(format!(".gmsh-api-{}.py", std::process::id()));
         std::fs::write(&file, script).map_err(|source| GmshError::Io {
             path: file.clone(),

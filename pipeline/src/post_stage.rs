@@ -63,12 +63,10 @@ pub fn run(ctx: &Ctx, solve_dir: &Path, out: &Path) -> Result<()> {
             residual_fraction: request.residual_fraction,
         },
     )?;
-    let stage_time = |stage: &str, file: &str, pointer: &str| -> Value {
-        let path = ctx.store.artifact_dir(ctx.keys.get(stage)).join(file);
-        read_json(&path)
-            .ok()
-            .and_then(|v| v.pointer(pointer).cloned())
-            .unwrap_or(Value::Null)
+    let stage_time = |stage: &str| -> Value {
+        ctx.store
+            .wall_time(ctx.keys.get(stage))
+            .map_or(Value::Null, Value::from)
     };
     let summary = json!({
         "scene": ctx.scene.name,
@@ -76,8 +74,8 @@ pub fn run(ctx: &Ctx, solve_dir: &Path, out: &Path) -> Result<()> {
         "curve": curve,
         "solver": solve,
         "stage_wall_time_s": {
-            "geometry": stage_time("geometry", "geometry.json", "/wall_time_s"),
-            "mesh": stage_time("mesh", "mesh.json", "/timings_s"),
+            "geometry": stage_time("geometry"),
+            "mesh": stage_time("mesh"),
             "solve": solve.pointer("/summary/wall_time_s/total").cloned().unwrap_or(Value::Null),
         },
     });

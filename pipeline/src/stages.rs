@@ -213,11 +213,10 @@ impl Ctx<'_> {
                 let partial = self.store.begin(key, resumable)?;
                 self.run_stage(stage, &partial)
                     .with_context(|| format!("stage {stage} of scene {}", self.scene.name))?;
-                self.store.commit(key, &partial)?;
-                self.printer.line(&format!(
-                    "{stage}: done in {:.1} s",
-                    started.elapsed().as_secs_f64()
-                ));
+                let seconds = started.elapsed().as_secs_f64();
+                self.store.commit(key, &partial, seconds)?;
+                self.printer
+                    .line(&format!("{stage}: done in {seconds:.1} s"));
                 true
             }
         };

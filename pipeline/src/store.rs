@@ -57,6 +57,9 @@ pub struct StageKey {
     /// `status` name what the user changed.
     #[serde(default)]
     pub written: Value,
+    /// Wall time of the run that produced the artifacts, s (not hashed).
+    #[serde(default)]
+    pub wall_time_s: Option<f64>,
 }
 
 impl StageKey {
@@ -73,6 +76,7 @@ impl StageKey {
             key,
             inputs,
             written: Value::Null,
+            wall_time_s: None,
         }
     }
 
@@ -134,8 +138,13 @@ pub struct KeyLock {
 }
 
 impl Store {
+    /// The work directory is made absolute once, so every stage and every
+    /// tool it runs (gmsh runs in other directories) sees the same paths.
     pub fn new(work: impl Into<PathBuf>) -> Self {
-        Store { work: work.into() }
+        let work = work.into();
+        Store {
+            work: std::path::absolute(&work).unwrap_or(work),
+        }
     }
 
     fn stage_root(&self, stage: &str) -> PathBuf {
@@ -153,6 +162,12 @@ impl Store {
 
     pub fn scene_dir(&self, scene: &str) -> PathBuf {
         self.work.join(scene)
+    }
+
+    /// Wall time recorded when `key`'s artifacts were produced, s.
+    pub fn wall_time(&self, key: &StageKey) -> Option<f64> {
+        let bytes = fs::read(self.artifact_dir(key).join("stage.json")).ok()?;
+        serde_json::from_slice::<StageKey>(&bytes).ok()?.wall_time_s
     }
 
     pub fn is_done(&self, key: &StageKey) -> bool {
@@ -187,10 +202,19 @@ impl Store {
 
     /// Marks the in-progress directory done: writes `stage.json` and renames
     /// the directory to its key in one step.
-    pub fn commit(&self, key: &StageKey, partial: &Path) -> Result<PathBuf, StoreError> {
+    pub fn commit(
+        &self,
+        key: &StageKey,
+        partial: &Path,
+        wall_time_s: f64,
+    ) -> Result<PathBuf, StoreError> {
+        let record = StageKey {
+            wall_time_s: Some(wall_time_s),
+            ..key.clone()
+        };
         write_atomic(
             &partial.join("stage.json"),
-            &serde_json::to_vec_pretty(key).expect("serialisable"),
+            &serde_json::to_vec_pretty(&record).expect("serialisable"),
         )?;
         let done = self.artifact_dir(key);
         if done.exists() {
@@ -359,7 +383,7 @@ mod tests {
         let partial = store.begin(&key, false).unwrap();
         fs::write(partial.join("geometry.json"), "{}").unwrap();
         assert!(!store.is_done(&key));
-        store.commit(&key, &partial).unwrap();
+        store.commit(&key, &partial, 0.5).unwrap();
         assert!(store.is_done(&key));
         store.publish("r1", &key, &["geometry.json"]).unwrap();
         assert!(work.join("r1/geometry.json").is_file());

@@ -173,6 +173,23 @@ fn stages_rerun_only_what_changed() {
     std::fs::remove_dir_all(&work).unwrap();
 }
 
+/// README: the default work directory is relative to where ribbar runs,
+/// and every stage (gmsh included) works from there.
+#[test]
+fn relative_work_directory() {
+    let dir = work_dir("relative");
+    std::fs::create_dir_all(&dir).unwrap();
+    let spec = repo().join(TINY);
+    let o = Command::new(env!("CARGO_BIN_EXE_ribbar"))
+        .args(["mesh", spec.to_str().unwrap()])
+        .current_dir(&dir)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(dir.join("ribbar-work/tiny-smooth/mesh.json").is_file());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 /// SPEC §8: bad input names the file and key, exits non-zero, never panics
 /// and leaves earlier artifacts intact.
 #[test]
