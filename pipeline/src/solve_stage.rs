@@ -91,7 +91,11 @@ fn curve_csv(rows: &[CurveRow], energy: Option<&[EnergyRow]>) -> Vec<u8> {
         );
         if let Some(e) = energy {
             let e = &e[i];
-            let _ = write!(out, ",{:e},{:e},{:e},{:e}", e.w_ext, e.w_int, e.stored, e.dissipated);
+            let _ = write!(
+                out,
+                ",{:e},{:e},{:e},{:e}",
+                e.w_ext, e.w_int, e.stored, e.dissipated
+            );
         }
         out.push(b'\n');
     }
@@ -416,9 +420,14 @@ pub fn run(ctx: &Ctx, mesh_dir: &Path, out: &Path) -> Result<()> {
             v
         }
         (Err(why), _) => serde_json::json!({"available": false, "reason": why}),
-        _ => serde_json::json!({"available": false, "reason": "energy rows do not match the curve"}),
+        _ => {
+            serde_json::json!({"available": false, "reason": "energy rows do not match the curve"})
+        }
     };
-    crate::store::write_atomic(&out.join("curve.csv"), &curve_csv(&result.rows, energy_rows.as_deref()))?;
+    crate::store::write_atomic(
+        &out.join("curve.csv"),
+        &curve_csv(&result.rows, energy_rows.as_deref()),
+    )?;
     let solve_json = serde_json::json!({
         "summary": result.summary,
         "completed": stopped.is_none(),
@@ -451,13 +460,28 @@ fn resume_energy<'a>(
     cp: &Checkpoint,
     path: &Path,
 ) -> std::result::Result<EnergyTracker<'a>, String> {
-    let bytes = std::fs::read(path).map_err(|e| format!("resumed without the energy record ({e})"))?;
+    let bytes =
+        std::fs::read(path).map_err(|e| format!("resumed without the energy record ({e})"))?;
     let mut rows: Vec<EnergyRow> =
         serde_json::from_slice(&bytes).map_err(|e| format!("unreadable energy record: {e}"))?;
     if rows.len() < cp.rows.len() {
-        return Err(format!("the energy record holds {} steps, the checkpoint {}", rows.len(), cp.rows.len()));
+        return Err(format!(
+            "the energy record holds {} steps, the checkpoint {}",
+            rows.len(),
+            cp.rows.len()
+        ));
     }
     rows.truncate(cp.rows.len());
     let force = cp.rows.last().map_or(0.0, |r| r.force);
-    EnergyTracker::resume(model, laws, rules, &cp.u, &cp.states, rows, cp.u_imposed, force).map_err(|e| e.to_string())
+    EnergyTracker::resume(
+        model,
+        laws,
+        rules,
+        &cp.u,
+        &cp.states,
+        rows,
+        cp.u_imposed,
+        force,
+    )
+    .map_err(|e| e.to_string())
 }
