@@ -453,9 +453,36 @@ impl System {
         trial: &mut States,
         kind: TangentKind,
         f_int: &mut [f64],
+        matrix: Option<&mut [f64]>,
+        upper: Option<&mut [f64]>,
+    ) -> Result<EvalTimings, AssemblyError> {
+        self.evaluate_kinds(
+            laws,
+            u,
+            committed,
+            trial,
+            [kind, kind],
+            f_int,
+            matrix,
+            upper,
+        )
+    }
+
+    /// As [`System::evaluate_full`] with one tangent kind for the tets
+    /// (`kinds[0]`) and one for the interface elements (`kinds[1]`).
+    #[allow(clippy::too_many_arguments)]
+    pub fn evaluate_kinds(
+        &self,
+        laws: &ElementLaws,
+        u: &[f64],
+        committed: &States,
+        trial: &mut States,
+        kinds: [TangentKind; 2],
+        f_int: &mut [f64],
         mut matrix: Option<&mut [f64]>,
         mut upper: Option<&mut [f64]>,
     ) -> Result<EvalTimings, AssemblyError> {
+        let [bulk_kind, iface_kind] = kinds;
         let mut timings = EvalTimings::default();
         f_int.iter_mut().for_each(|v| *v = 0.0);
         if let Some(m) = matrix.as_deref_mut() {
@@ -486,7 +513,7 @@ impl System {
                 let ue: [f64; 12] = std::array::from_fn(|i| u[d[i]]);
                 let strain = g.strain(&ue);
                 let r = laws.tets[index]
-                    .step(&committed.bulk[index], &strain, kind)
+                    .step(&committed.bulk[index], &strain, bulk_kind)
                     .map_err(|source| AssemblyError::BulkLaw {
                         index,
                         region: self.tet_region[index],
@@ -565,7 +592,7 @@ impl System {
                         .step(
                             &committed.interface[INTERFACE_POINTS * index + p],
                             &jump,
-                            kind,
+                            iface_kind,
                         )
                         .map_err(|source| AssemblyError::InterfaceLaw {
                             index,

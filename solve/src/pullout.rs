@@ -163,6 +163,12 @@ pub struct Summary {
     /// GMRES iterations of the Newton–Krylov solver.
     #[serde(default)]
     pub krylov_iterations: usize,
+    /// Steps accepted on the force criterion alone: Newton stagnated with
+    /// the residual already below `residual_tolerance` (points switching
+    /// between loading and unloading, or stick and slip, kept the energy
+    /// criterion out of reach).
+    #[serde(default)]
+    pub force_only_steps: usize,
     pub wall_time_s: WallTimes,
 }
 
@@ -480,6 +486,8 @@ struct Attempt {
     iterations: usize,
     history: Vec<f64>,
     failure: Option<String>,
+    /// Converged on the force criterion only (see `Summary::force_only_steps`).
+    force_only: bool,
 }
 
 /// Linear-algebra state reused across iterations and steps.
@@ -709,6 +717,7 @@ pub fn run(
         summary.krylov_iterations = lin.krylov_iterations;
         match attempt.failure {
             None => {
+                summary.force_only_steps += usize::from(attempt.force_only);
                 last_inc.clear();
                 last_inc.extend(u_trial.iter().zip(&u).map(|(a, b)| a - b));
                 last_h = h_try;
@@ -873,6 +882,7 @@ fn newton(
         iterations,
         history,
         failure: Some(why),
+        force_only: false,
     };
     // Correction of the previous iteration (for the line search).
     let mut prev: Option<(Vec<f64>, f64)> = None;
@@ -880,6 +890,11 @@ fn newton(
     // Forcing term of the last correction and the residual it started from.
     let mut eta_prev = 0.0f64;
     let mut r_prev = 0.0f64;
+    // Tangent kinds of the tets and of the interface elements: a stagnating
+    // consistent-tangent Newton continues with the interfaces' secant
+    // matrix (see below), from iteration `window`.
+    let mut kinds = [settings.tangent; 2];
+    let mut window = 0;
     for k in 0..=settings.max_iterations {
         let mut eval = |u: &[f64],
                         trial: &mut States,
@@ -887,16 +902,8 @@ fn newton(
                         values: &mut [f64],
                         upper: &mut Vec<f64>| {
             let upper = (!upper.is_empty()).then_some(upper.as_mut_slice());
-            let res = system.evaluate_full(
-                laws,
-                u,
-                committed,
-                trial,
-                settings.tangent,
-                f_int,
-                Some(values),
-                upper,
-            );
+            let res =
+                system.evaluate_kinds(laws, u, committed, trial, kinds, f_int, Some(values), upper);
             match res {
                 Ok(t) => {
                     wall.add_eval(&t);
@@ -972,6 +979,7 @@ fn newton(
                 iterations: k,
                 history,
                 failure: None,
+                force_only: false,
             };
         }
         if k == settings.max_iterations {
@@ -980,12 +988,31 @@ fn newton(
         // Stagnation (switching stick/slip or loading/unloading points that
         // Newton cannot settle): the last 4 residuals all above half the
         // best before them. A cut-back now is cheaper than more iterations.
-        if k >= 8 {
-            let best_before = history[..k - 3]
+        if k >= window + 8 {
+            let best_before = history[window..k - 3]
                 .iter()
                 .copied()
                 .fold(f64::INFINITY, f64::min);
-            if history[k - 3..].iter().all(|&v| v > 0.5 * best_before) {
+            let stagnating = history[k - 3..].iter().all(|&v| v > 0.5 * best_before);
+            if stagnating && kinds[1] == TangentKind::Consistent {
+                // Node pairs switching between stick and slip make the
+                // interfaces' consistent tangent jump from one iterate to
+                // the next; their secant matrix does not. The concrete
+                // keeps its consistent tangent: with Mazars' secant matrix
+                // Newton stagnated from the first damage on (r1-coarse).
+                kinds[1] = TangentKind::Secant;
+                window = k;
+            } else if stagnating {
+                if rnorm <= settings.residual_tolerance * scale {
+                    // In equilibrium to the force tolerance; more
+                    // iterations only flip the same points back and forth.
+                    return Attempt {
+                        iterations: k,
+                        history,
+                        failure: None,
+                        force_only: true,
+                    };
+                }
                 return fail(
                     history,
                     k,
@@ -1028,6 +1055,7 @@ fn newton(
                 iterations: 1,
                 history,
                 failure: None,
+                force_only: false,
             };
         }
         energy_ref = energy_ref.max(g0.abs());
@@ -1285,4 +1313,33 @@ fn newton_krylov(
     let out = lin.chol.solve_in_place(du);
     wall.solve += t.elapsed().as_secs_f64();
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The Eisenstat–Walker forcing term (choice 2) stays within
+    /// [`krylov_tolerance`, 0.1], starts a step at 0.1, follows
+    /// 0.9 (‖r_k‖/‖r_{k−1}‖)² in between, and `fixed` forcing is constant
+    /// (SPEC §6: inexact Newton corrections; Eisenstat & Walker 1996).
+    #[test]
+    fn forcing_term_follows_eisenstat_walker_within_bounds() {
+        let ew = SolverSettings::default();
+        assert_eq!(ew.forcing, Forcing::EisenstatWalker);
+        let f = |k, r, rp, ep| forcing_term(&ew, k, r, rp, ep, 1.0);
+        assert_eq!(f(0, 1.0, 0.0, 0.0), 0.1);
+        // Ratio 0.2: 0.9·0.04 = 0.036.
+        assert!((f(1, 0.2, 1.0, 0.1) - 0.036).abs() < 1e-15);
+        // A slow decrease is capped at 0.1, a fast one floored at 1e-3.
+        assert_eq!(f(2, 0.9, 1.0, 0.1), 0.1);
+        assert_eq!(f(3, 1e-3, 1.0, 0.01), ew.krylov_tolerance);
+        // Safeguard: a previous η of 0.4 keeps η ≥ 0.9·0.16 = 0.144 → cap.
+        assert_eq!(f(4, 1e-2, 1.0, 0.4), 0.1);
+        let fixed = SolverSettings {
+            forcing: Forcing::Fixed,
+            ..ew
+        };
+        assert_eq!(forcing_term(&fixed, 3, 0.5, 1.0, 0.1, 1.0), 1e-3);
+    }
 }

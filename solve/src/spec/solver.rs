@@ -215,7 +215,8 @@ pub enum Predictor {
 pub struct SolverSettings {
     /// ‖residual‖ ≤ tol · ‖reaction‖ (relative force criterion).
     pub residual_tolerance: f64,
-    /// |Δu · r| ≤ tol · |Δu₁ · r₀| (energy criterion, relative to the step's first iteration).
+    /// |Δu_k · r_{k−1}| ≤ tol · max(largest |Δu_j · r_{j−1}| of the step,
+    /// ‖reactions‖ · step size) (energy criterion, dimensionless).
     pub energy_tolerance: f64,
     /// Newton iterations per attempt before a cut-back.
     pub max_iterations: usize,
