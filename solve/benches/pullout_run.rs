@@ -7,7 +7,9 @@
 //! `SCENE.yaml` gives the `materials`, `loading` and `solver` sections (a
 //! scene file of `specs/`), `MODEL.bin` the mesh stage's model; each
 //! `key=value` overrides a `solver` key (e.g. `linear_solver=cholesky`,
-//! `tangent=secant`) or, as `loading.key=value`, a `loading` key. Prints
+//! `tangent=secant`) or, as `loading.key=value`, a `loading` key;
+//! `bench.save_at=N bench.checkpoint=PATH` saves the state after step N
+//! there, `bench.checkpoint=PATH` alone resumes from it. Prints
 //! every converged step, every cut-back, and the summary with the phase
 //! times.
 
@@ -24,11 +26,19 @@ use std::sync::Arc;
 struct Print {
     krylov: usize,
     factorisations: usize,
+    /// Save the checkpoint of this step to this file.
+    save: Option<(usize, std::path::PathBuf)>,
 }
 impl Observer for Print {
     fn step_converged(&mut self, r: &StepReport, v: &CommittedView<'_>) {
         let w = r.times;
-        let s = (v.checkpoint)().summary;
+        let cp = (v.checkpoint)();
+        if let Some((n, path)) = &self.save {
+            if *n == r.row.step {
+                cp.save(path).expect("checkpoint");
+            }
+        }
+        let s = cp.summary;
         let (kr, fa) = (
             s.krylov_iterations - self.krylov,
             s.factorisations - self.factorisations,
@@ -117,14 +127,22 @@ fn main() {
         model.tets.len(),
         model.interfaces.len()
     );
-    let res = solve_pullout(
-        &model,
-        &laws,
-        &loading,
-        &settings,
-        None,
-        &mut Print::default(),
-    );
+    let opt = |k: &str| {
+        scene
+            .get("bench")
+            .and_then(|b| b.get(k))
+            .map(|v| serde_yaml::to_string(v).unwrap().trim().to_string())
+    };
+    let mut print = Print::default();
+    let mut resume = None;
+    match (opt("save_at"), opt("checkpoint")) {
+        (Some(n), Some(p)) => print.save = Some((n.parse().expect("bench.save_at"), p.into())),
+        (None, Some(p)) => {
+            resume = Some(solve::pullout::Checkpoint::load(p.as_ref()).expect("checkpoint"))
+        }
+        _ => {}
+    }
+    let res = solve_pullout(&model, &laws, &loading, &settings, resume, &mut print);
     let summary = match &res {
         Ok(r) => r.summary.clone(),
         Err(solve::pullout::SolveError::Stalled { partial, .. }) => {
