@@ -116,9 +116,10 @@ pub fn run(ctx: &Ctx, solve_dir: &Path, out: &Path) -> Result<()> {
             .with_context(|| format!("copying {}", profiles_csv.display()))?;
     }
     ctx.printer.line(&format!(
-        "post: peak σ_mb {:.3} MPa at FED {:.4} mm, residual {}",
+        "post: first peak σ_mb {:.3} MPa at FED {:.4} mm, maximum {:.3} MPa, residual {}",
+        curve.first_peak_bond_stress / 1e6,
+        curve.fed_at_first_peak * 1e3,
         curve.peak_bond_stress / 1e6,
-        curve.fed_at_peak * 1e3,
         curve
             .residual_bond_stress
             .map_or("n/a (no slip past the peak)".to_string(), |r| format!(

@@ -359,3 +359,31 @@ fn curve_distance_refuses() {
     assert!(curve_distance(&good, &stuck, CurveAxis::Fed, None).is_err());
     assert!(curve_distance(&good, &good, CurveAxis::Fed, Some(-1.0)).is_err());
 }
+
+/// A frictional branch that rises above the adhesion peak (ribbed bars)
+/// does not hide the first peak: it is the running maximum before the
+/// first drop of more than 5 %.
+#[test]
+fn first_peak_is_the_adhesion_peak() {
+    use pipeline::post::first_peak_bond_stress;
+    let pts = [
+        (1e-5, 4e6),
+        (3e-5, 5.7e6),
+        (1e-4, 4e6),
+        (3e-4, 2.7e6),
+        (1e-3, 5.9e6),
+    ];
+    let rows: Vec<CurveRow> = pts
+        .iter()
+        .enumerate()
+        .map(|(i, &(fed, s))| CurveRow::new(i as u64 + 1, fed, 0.0, fed, s, 1))
+        .collect();
+    let (first, fed, step) = first_peak_bond_stress(&rows).unwrap();
+    assert_eq!((first, fed, step), (5.7e6, 3e-5, 2));
+    let s = summarize(&rows, &SummaryOptions::default()).unwrap();
+    assert_eq!(s.peak_bond_stress, 5.9e6);
+    assert_eq!(s.first_peak_bond_stress, 5.7e6);
+    // Without a drop, the first peak is the overall peak.
+    let rising: Vec<CurveRow> = rows.iter().take(2).copied().collect();
+    assert_eq!(first_peak_bond_stress(&rising).unwrap().0, 5.7e6);
+}

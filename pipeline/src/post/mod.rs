@@ -47,7 +47,8 @@ pub use plot::{
     interface_line_svg, ErrorTimeSeries, InterfaceProfile, InterfaceSample, FONT_FAMILY,
 };
 pub use summary::{
-    energy_to_fed, peak_bond_stress, residual_bond_stress, summarize, CurveSummary, SummaryOptions,
+    energy_to_fed, first_peak_bond_stress, peak_bond_stress, residual_bond_stress, summarize,
+    CurveSummary, SummaryOptions, FIRST_PEAK_DROP,
 };
 pub use table::{
     convergence_order_table, convergence_table, study_table, write_convergence_tables,

@@ -38,6 +38,12 @@ pub struct CurveSummary {
     pub fed_at_peak: f64,
     /// Step number where the peak is reached.
     pub step_at_peak: u64,
+    /// First (adhesion) peak σ_mb, Pa: see [`first_peak_bond_stress`].
+    #[serde(default)]
+    pub first_peak_bond_stress: f64,
+    /// FED at the first peak, m.
+    #[serde(default)]
+    pub fed_at_first_peak: f64,
     /// ∫ σ_mb dFED from the unloaded state up to `energy_fed_limit`, J/m²
     /// (= Pa·m = N/m: work per unit bar–concrete contact area). `None` when
     /// the curve stops before that FED.
@@ -70,6 +76,14 @@ impl CurveSummary {
                 num(self.peak_bond_stress * 1e-6),
             ),
             ("fed_at_peak_mm".into(), num(self.fed_at_peak * 1e3)),
+            (
+                "first_peak_bond_stress_MPa".into(),
+                num(self.first_peak_bond_stress * 1e-6),
+            ),
+            (
+                "fed_at_first_peak_mm".into(),
+                num(self.fed_at_first_peak * 1e3),
+            ),
             (
                 format!("energy_to_{}mm_J_per_m2", fmt_mm(self.energy_fed_limit)),
                 self.energy.map_or(Cell::Empty, Cell::Num),
@@ -194,10 +208,33 @@ pub fn residual_bond_stress(rows: &[CurveRow], fraction: f64) -> Result<f64, Pos
     Ok(integral / (end - lower))
 }
 
+/// Fraction of the running maximum σ_mb must fall below for that maximum to
+/// count as the first (adhesion) peak.
+pub const FIRST_PEAK_DROP: f64 = 0.05;
+
+/// The first peak (Pa), its FED (m) and step: the running maximum up to the
+/// first step where σ_mb has fallen more than [`FIRST_PEAK_DROP`] below it.
+/// On a ribbed bar the frictional branch can rise above the adhesion peak
+/// later; this is the peak of the bond's first failure. Without such a drop
+/// it is the overall peak.
+pub fn first_peak_bond_stress(rows: &[CurveRow]) -> Result<(f64, f64, u64), PostError> {
+    check_rows(rows)?;
+    let mut best = &rows[0];
+    for r in rows {
+        if r.bond_stress > best.bond_stress {
+            best = r;
+        } else if r.bond_stress < (1.0 - FIRST_PEAK_DROP) * best.bond_stress {
+            break;
+        }
+    }
+    Ok((best.bond_stress, best.fed, best.step))
+}
+
 /// Peak, energy, residual and counts of one curve.
 pub fn summarize(rows: &[CurveRow], opts: &SummaryOptions) -> Result<CurveSummary, PostError> {
     check_rows(rows)?;
     let (peak, fed_at_peak, step_at_peak) = peak_bond_stress(rows)?;
+    let (first_peak, fed_at_first_peak, _) = first_peak_bond_stress(rows)?;
     let final_fed = rows[rows.len() - 1].fed;
     let energy_fed_limit = opts.energy_fed_limit.unwrap_or(final_fed);
     if let Some(limit) = opts.energy_fed_limit {
@@ -234,6 +271,8 @@ pub fn summarize(rows: &[CurveRow], opts: &SummaryOptions) -> Result<CurveSummar
         peak_bond_stress: peak,
         fed_at_peak,
         step_at_peak,
+        first_peak_bond_stress: first_peak,
+        fed_at_first_peak,
         energy,
         energy_fed_limit,
         residual_bond_stress: residual,
