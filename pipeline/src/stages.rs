@@ -15,7 +15,7 @@ use std::time::Instant;
 const GEOMETRY_FORMAT: u32 = 1;
 const MESH_FORMAT: u32 = 2;
 const SOLVE_FORMAT: u32 = 1;
-const POST_FORMAT: u32 = 1;
+const POST_FORMAT: u32 = 2;
 
 pub const STAGES: [&str; 4] = ["geometry", "mesh", "solve", "post"];
 
