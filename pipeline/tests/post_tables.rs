@@ -69,6 +69,8 @@ fn study_table_column_order() {
             "mesh.h_interface",
             "peak_bond_stress_MPa",
             "fed_at_peak_mm",
+            "first_peak_bond_stress_MPa",
+            "fed_at_first_peak_mm",
             "energy_to_1mm_J_per_m2",
             "residual_bond_stress_MPa",
             "final_fed_mm",
@@ -81,7 +83,7 @@ fn study_table_column_order() {
     assert_eq!(t.rows[1][3], Cell::Num(0.0008));
     assert_eq!(t.rows[0][4], Cell::Num(10.0));
     assert_eq!(t.rows[1][5], Cell::Empty);
-    assert_eq!(t.rows[0][9], Cell::Int(4));
+    assert_eq!(t.rows[0][11], Cell::Int(4));
 }
 
 /// CSV is written with full precision and RFC 4180 quoting, Markdown with
