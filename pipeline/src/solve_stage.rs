@@ -171,6 +171,39 @@ fn mean_traction(
     Some(t)
 }
 
+/// Where the profile of the current peak is kept until the run ends.
+fn peak_profile_path(profile: &Path) -> PathBuf {
+    profile.with_file_name("interface_profile_peak.part")
+}
+
+/// Adds the peak's profile to the others, ordered by step.
+fn merge_peak_profile(profile: &Path) -> Result<()> {
+    let peak_path = peak_profile_path(profile);
+    let Ok(peak) = std::fs::read_to_string(&peak_path) else {
+        return Ok(());
+    };
+    let text = std::fs::read_to_string(profile)?;
+    let mut lines = text.lines();
+    let header = lines.next().unwrap_or("step,fed,z,normal,shear");
+    let step = |l: &&str| {
+        l.split(',')
+            .next()
+            .and_then(|s| s.parse::<usize>().ok())
+            .unwrap_or(0)
+    };
+    let mut rows: Vec<&str> = lines.chain(peak.lines()).collect();
+    rows.sort_by_key(step);
+    rows.dedup();
+    let mut out = format!("{header}\n");
+    for r in rows {
+        out.push_str(r);
+        out.push('\n');
+    }
+    crate::store::write_atomic(profile, out.as_bytes())?;
+    std::fs::remove_file(&peak_path)?;
+    Ok(())
+}
+
 struct StageObserver<'a> {
     ctx: &'a Ctx<'a>,
     laws: &'a ElementLaws,
@@ -220,10 +253,15 @@ impl StageObserver<'_> {
                 report.row.step, report.row.fed, z, tn, tt
             )?;
         }
-        let mut file = std::fs::OpenOptions::new()
-            .append(true)
-            .open(&self.profile_path)?;
-        file.write_all(&lines)?;
+        if name == "peak" {
+            // Each new maximum replaces the last: only the peak's profile stays.
+            crate::store::write_atomic(&peak_profile_path(&self.profile_path), &lines)?;
+        } else {
+            let mut file = std::fs::OpenOptions::new()
+                .append(true)
+                .open(&self.profile_path)?;
+            file.write_all(&lines)?;
+        }
         Ok(())
     }
 }
@@ -404,6 +442,7 @@ pub fn run(ctx: &Ctx, mesh_dir: &Path, out: &Path) -> Result<()> {
             observer.write_fields("end", &report, &view)?;
         }
     }
+    merge_peak_profile(&observer.profile_path)?;
     let energy_rows = observer.energy.as_ref().ok().map(|t| t.rows().to_vec());
     let energy_check = match (&observer.energy, &energy_rows) {
         (Ok(_), Some(rows)) if rows.len() == result.rows.len() => {
