@@ -215,6 +215,10 @@ struct StageObserver<'a> {
     last_checkpoint: Instant,
     checkpoint_cost: Duration,
     peak: f64,
+    /// Set once σ_mb has dropped below the peak by more than
+    /// `post::FIRST_PEAK_DROP`: the peak fields are then the adhesion peak's
+    /// and a later frictional maximum does not replace them.
+    peak_passed: bool,
     error: Option<anyhow::Error>,
     cutbacks: Vec<String>,
     /// The energy balance; `Err` says why it is not available.
@@ -290,7 +294,10 @@ impl Observer for StageObserver<'_> {
         if request.steps.contains(&r.step) {
             result = self.write_fields(&format!("step{:04}", r.step), report, view);
         }
-        if request.at_peak && r.bond_stress > self.peak && result.is_ok() {
+        if r.bond_stress < (1.0 - crate::post::FIRST_PEAK_DROP) * self.peak {
+            self.peak_passed = true;
+        }
+        if request.at_peak && !self.peak_passed && r.bond_stress > self.peak && result.is_ok() {
             self.peak = r.bond_stress;
             result = self.write_fields("peak", report, view);
         }
@@ -355,10 +362,33 @@ pub fn run(ctx: &Ctx, mesh_dir: &Path, out: &Path) -> Result<()> {
     };
     // Profiles of steps after the checkpoint are recomputed: drop them.
     let resumed_steps = checkpoint.as_ref().map_or(0, |cp| cp.rows.len());
-    let peak_so_far = checkpoint
-        .as_ref()
-        .and_then(|cp| cp.rows.iter().map(|r| r.bond_stress).reduce(f64::max))
-        .unwrap_or(f64::NEG_INFINITY);
+    let (peak_so_far, peak_passed) = match checkpoint.as_ref().filter(|cp| !cp.rows.is_empty()) {
+        Some(cp) => {
+            let rows: Vec<crate::post::CurveRow> = cp
+                .rows
+                .iter()
+                .map(|r| {
+                    crate::post::CurveRow::new(
+                        r.step as u64,
+                        r.u_imposed,
+                        r.force,
+                        r.fed,
+                        r.bond_stress,
+                        r.iterations as u64,
+                    )
+                })
+                .collect();
+            let (first, _, step) = crate::post::first_peak_bond_stress(&rows)?;
+            (
+                first,
+                (step as usize) < cp.rows.len()
+                    && rows
+                        .iter()
+                        .any(|r| r.bond_stress < (1.0 - crate::post::FIRST_PEAK_DROP) * first),
+            )
+        }
+        None => (f64::NEG_INFINITY, false),
+    };
     let profile_path = out.join("interface_profile.csv");
     let mut profile = b"step,fed,z,normal,shear\n".to_vec();
     if resumed_steps > 0 {
@@ -388,6 +418,7 @@ pub fn run(ctx: &Ctx, mesh_dir: &Path, out: &Path) -> Result<()> {
         last_checkpoint: Instant::now(),
         checkpoint_cost: Duration::ZERO,
         peak: peak_so_far,
+        peak_passed,
         error: None,
         cutbacks: Vec::new(),
         energy,
