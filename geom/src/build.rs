@@ -153,15 +153,9 @@ struct Group {
 
 /// Writes `path` atomically: a temporary file in the same directory, renamed.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), GeomError> {
-    let io = |source| GeomError::Io {
+    crate::fsutil::write_atomic(path, bytes).map_err(|source| GeomError::Io {
         path: path.to_path_buf(),
         source,
-    };
-    let tmp = path.with_extension(format!("tmp{}", std::process::id()));
-    std::fs::write(&tmp, bytes).map_err(io)?;
-    std::fs::rename(&tmp, path).map_err(|e| {
-        let _ = std::fs::remove_file(&tmp);
-        io(e)
     })
 }
 

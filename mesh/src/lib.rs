@@ -50,18 +50,7 @@ fn temp_path(path: &Path) -> PathBuf {
 /// Writes `bytes` to `path` through a temporary file in the same directory
 /// and a rename, so `path` is either the old file or the complete new one.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), MeshError> {
-    let tmp = temp_path(path);
-    let result = (|| {
-        use std::io::Write;
-        let mut f = std::fs::File::create(&tmp)?;
-        f.write_all(bytes)?;
-        f.sync_all()?;
-        std::fs::rename(&tmp, path)
-    })();
-    result.map_err(|e| {
-        let _ = std::fs::remove_file(&tmp);
-        MeshError::io(path, e)
-    })
+    geom::fsutil::write_atomic(path, bytes).map_err(|e| MeshError::io(path, e))
 }
 
 /// Removes the listed temporary files when dropped (on any early return).

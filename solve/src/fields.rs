@@ -46,13 +46,10 @@ fn data_array(out: &mut String, name: &str, comps: usize, values: impl Iterator<
 }
 
 fn write_atomic(path: &Path, text: &str) -> Result<(), FieldsError> {
-    let io = |source| FieldsError::Io {
+    geom::fsutil::write_atomic(path, text.as_bytes()).map_err(|source| FieldsError::Io {
         path: path.display().to_string(),
         source,
-    };
-    let tmp = path.with_extension("vtu.tmp");
-    std::fs::write(&tmp, text).map_err(io)?;
-    std::fs::rename(&tmp, path).map_err(io)
+    })
 }
 
 fn header(out: &mut String, model: &Model, n_cells: usize) {

@@ -6,15 +6,7 @@ use std::path::{Path, PathBuf};
 /// A temporary sibling of `path` that keeps its extension (the PNG encoder
 /// picks its format from it), unique per process.
 pub(crate) fn temp_sibling(path: &Path) -> PathBuf {
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let ext = path
-        .extension()
-        .map(|e| format!(".{}", e.to_string_lossy()))
-        .unwrap_or_default();
-    path.with_file_name(format!(".{name}.tmp-{}{ext}", std::process::id()))
+    geom::fsutil::temp_sibling(path)
 }
 
 pub(crate) fn create_parent(path: &Path) -> Result<(), PostError> {
@@ -44,12 +36,9 @@ pub(crate) fn commit(tmp: &Path, path: &Path) -> Result<(), PostError> {
 
 /// Writes `bytes` to `path` through a temporary file and a rename.
 pub(crate) fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), PostError> {
-    create_parent(path)?;
-    let tmp = temp_sibling(path);
-    std::fs::write(&tmp, bytes).map_err(|source| PostError::Io {
+    geom::fsutil::write_atomic(path, bytes).map_err(|source| PostError::Io {
         action: "writing",
-        path: tmp.clone(),
+        path: path.to_path_buf(),
         source,
-    })?;
-    commit(&tmp, path)
+    })
 }

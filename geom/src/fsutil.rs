@@ -1,0 +1,60 @@
+//! Writing files so that a reader sees either the old content or the whole
+//! new one, never a half-written file: every crate's artifacts go through
+//! [`write_atomic`], each wrapping the I/O error in its own typed error.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+/// A temporary sibling of `path`, unique per process, keeping the extension
+/// (tools that pick a format from the name still see it).
+pub fn temp_sibling(path: &Path) -> PathBuf {
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let ext = path
+        .extension()
+        .map(|e| format!(".{}", e.to_string_lossy()))
+        .unwrap_or_default();
+    path.with_file_name(format!(".{name}.tmp-{}{ext}", std::process::id()))
+}
+
+/// Writes `bytes` to `path` (parent directories created) through a synced
+/// temporary sibling and one rename; the temporary is removed on failure.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir)?;
+    }
+    let tmp = temp_sibling(path);
+    let result = (|| {
+        let mut f = std::fs::File::create(&tmp)?;
+        f.write_all(bytes)?;
+        f.sync_all()?;
+        std::fs::rename(&tmp, path)
+    })();
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn replaces_the_file_whole_and_leaves_no_temporary() {
+        let dir = std::env::temp_dir().join(format!("ribbar-fsutil-{}", std::process::id()));
+        let path = dir.join("sub/a.json");
+        write_atomic(&path, b"old").unwrap();
+        write_atomic(&path, b"new").unwrap();
+        assert_eq!(std::fs::read(&path).unwrap(), b"new");
+        assert_eq!(std::fs::read_dir(dir.join("sub")).unwrap().count(), 1);
+        // A target that cannot be replaced by a file: an error, no leftover.
+        std::fs::create_dir_all(dir.join("sub/d")).unwrap();
+        std::fs::write(dir.join("sub/d/x"), b"").unwrap();
+        assert!(write_atomic(&dir.join("sub/d"), b"x").is_err());
+        assert_eq!(std::fs::read_dir(dir.join("sub")).unwrap().count(), 2);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}
