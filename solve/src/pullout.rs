@@ -234,9 +234,7 @@ impl Checkpoint {
                 detail: e.to_string(),
             }
         })?;
-        let tmp = path.with_extension("tmp");
-        std::fs::write(&tmp, bytes).map_err(io)?;
-        std::fs::rename(&tmp, path).map_err(io)
+        geom::fsutil::write_atomic(path, &bytes).map_err(io)
     }
 
     pub fn load(path: &Path) -> Result<Self, CheckpointError> {
