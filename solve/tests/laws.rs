@@ -526,3 +526,38 @@ fn secant_tangents() {
         .unwrap();
     assert!((r.tangent * u - r.traction).amax() < 1e-6);
 }
+
+/// Virgin points whose strain norm stays below ε_D0 take the elastic fast
+/// path (no eigen-decomposition); it must give exactly what the general path
+/// gives, and must not hide the onset of damage just beyond the bound.
+#[test]
+fn mazars_virgin_points_below_the_strain_bound_are_elastic() {
+    let law = mazars();
+    let c = law.stiffness();
+    let virgin = BulkState::default();
+    let e0 = law.eps_d0;
+    // Below the bound (fast path), and compressive beyond it (general path,
+    // ε_eq = 0): elastic either way.
+    let below = [
+        Vector6::new(0.99 * e0, 0.0, 0.0, 0.0, 0.0, 0.0),
+        Vector6::new(0.5 * e0, -0.5 * e0, 0.3 * e0, 0.4 * e0, -0.2 * e0, 0.1 * e0),
+        Vector6::new(-3.0 * e0, -3.0 * e0, -3.0 * e0, 0.0, 0.0, 0.0),
+    ];
+    for e in below {
+        for kind in [
+            TangentKind::Consistent,
+            TangentKind::Secant,
+            TangentKind::Elastic,
+        ] {
+            let r = law.step(&virgin, &e, kind).unwrap();
+            assert_eq!(r.state.damage, 0.0, "{e:?}");
+            assert_eq!(r.state.kappa, e0, "{e:?}");
+            assert!((r.stress - c * e).norm() <= 1e-12 * (c * e).norm(), "{e:?}");
+            assert_eq!(r.tangent, c, "{e:?}");
+        }
+    }
+    // Just beyond the bound in uniaxial tension: ε_eq > ε_D0, damage starts.
+    let e = Vector6::new(1.01 * e0, -0.2 * 1.01 * e0, -0.2 * 1.01 * e0, 0.0, 0.0, 0.0);
+    let r = law.step(&virgin, &e, TangentKind::Consistent).unwrap();
+    assert!(r.state.damage > 0.0 && r.state.kappa > e0);
+}
