@@ -844,6 +844,9 @@ fn diagnose(committed: &States, trial: &States) -> String {
     )
 }
 
+/// Shortest line-search step kept; below it the full Newton step is taken.
+const LINE_SEARCH_MIN_STEP: f64 = 0.25;
+
 /// Newton iterations at fixed Dirichlet values (already in `u`).
 ///
 /// Convergence needs both criteria of SPEC §6 after at least one
@@ -855,9 +858,6 @@ fn diagnose(committed: &States, trial: &States) -> String {
 /// after a cut-back to a step of a few nm, the first correction carries only
 /// the tiny imposed increment, and the leftover imbalance of the previous
 /// step (converged to tol_r, not to zero) then looks like a large energy.
-/// Shortest line-search step kept; below it the full Newton step is taken.
-const LINE_SEARCH_MIN_STEP: f64 = 0.25;
-
 #[allow(clippy::too_many_arguments)]
 fn newton(
     system: &System,
