@@ -267,11 +267,11 @@ impl Cholesky {
     }
 }
 
-/// Result of a conjugate-gradient solve.
+/// Result of a Krylov solve (PCG or GMRES).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct PcgInfo {
+pub struct KrylovInfo {
     pub iterations: usize,
-    /// Final ‖b − A x‖ / ‖b‖.
+    /// Final ‖b − A x‖ / ‖b‖ (for GMRES the Arnoldi estimate).
     pub relative_residual: f64,
 }
 
@@ -285,12 +285,12 @@ pub fn pcg(
     x: &mut [f64],
     tolerance: f64,
     max_iterations: usize,
-) -> Result<PcgInfo, LinearError> {
+) -> Result<KrylovInfo, LinearError> {
     let n = b.len();
     x.iter_mut().for_each(|v| *v = 0.0);
     let bnorm = norm(b);
     if bnorm == 0.0 {
-        return Ok(PcgInfo {
+        return Ok(KrylovInfo {
             iterations: 0,
             relative_residual: 0.0,
         });
@@ -323,7 +323,7 @@ pub fn pcg(
             return Err(LinearError::NonFinite);
         }
         if rel <= tolerance {
-            return Ok(PcgInfo {
+            return Ok(KrylovInfo {
                 iterations: it,
                 relative_residual: rel,
             });
@@ -387,14 +387,6 @@ impl SplitMatrix<'_> {
     }
 }
 
-/// Result of a GMRES solve.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct GmresInfo {
-    pub iterations: usize,
-    /// Final ‖b − A x‖ / ‖b‖ (the Arnoldi estimate).
-    pub relative_residual: f64,
-}
-
 /// GMRES for A x = b from x = 0, right-preconditioned by the Cholesky
 /// factor `m` of an SPD matrix close to A (A M⁻¹ y = b, x = M⁻¹ y), without
 /// restart: stops at ‖b − A x‖ ≤ `tolerance`·‖b‖ or fails after
@@ -408,12 +400,12 @@ pub fn gmres(
     x: &mut [f64],
     tolerance: f64,
     max_iterations: usize,
-) -> Result<GmresInfo, LinearError> {
+) -> Result<KrylovInfo, LinearError> {
     let n = b.len();
     x.iter_mut().for_each(|v| *v = 0.0);
     let beta = norm(b);
     if beta == 0.0 {
-        return Ok(GmresInfo {
+        return Ok(KrylovInfo {
             iterations: 0,
             relative_residual: 0.0,
         });
@@ -494,7 +486,7 @@ pub fn gmres(
     m.solve_in_place(&mut z)?;
     x.copy_from_slice(&z);
     if rel <= tolerance {
-        Ok(GmresInfo {
+        Ok(KrylovInfo {
             iterations: k,
             relative_residual: rel,
         })

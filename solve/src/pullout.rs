@@ -811,33 +811,30 @@ pub fn run(
     })
 }
 
+/// How many points changed by `changed` from their committed state.
+fn count_changed<T>(committed: &[T], trial: &[T], changed: impl Fn(&T, &T) -> bool) -> usize {
+    committed
+        .iter()
+        .zip(trial)
+        .filter(|(c, t)| changed(c, t))
+        .count()
+}
+
 /// Damage growth during a failed attempt, as a hint of the likely cause.
 fn diagnose(committed: &States, trial: &States) -> String {
     let grew = |a: f64, b: f64| b > a + 1e-12;
-    let iface = committed
-        .interface
-        .iter()
-        .zip(&trial.interface)
-        .filter(|(c, t)| grew(c.damage, t.damage))
-        .count();
-    let bulk = committed
-        .bulk
-        .iter()
-        .zip(&trial.bulk)
-        .filter(|(c, t)| grew(c.damage, t.damage))
-        .count();
-    let plastic = committed
-        .bulk
-        .iter()
-        .zip(&trial.bulk)
-        .filter(|(c, t)| c.plastic_strain != t.plastic_strain)
-        .count();
-    let slip = committed
-        .interface
-        .iter()
-        .zip(&trial.interface)
-        .filter(|(c, t)| c.slip != t.slip)
-        .count();
+    let iface = count_changed(&committed.interface, &trial.interface, |c, t| {
+        grew(c.damage, t.damage)
+    });
+    let bulk = count_changed(&committed.bulk, &trial.bulk, |c, t| {
+        grew(c.damage, t.damage)
+    });
+    let plastic = count_changed(&committed.bulk, &trial.bulk, |c, t| {
+        c.plastic_strain != t.plastic_strain
+    });
+    let slip = count_changed(&committed.interface, &trial.interface, |c, t| {
+        c.slip != t.slip
+    });
     format!(
         "in the last iterate, interface damage grew at {iface} node pairs and frictional slip changed at {slip}; \
          concrete damage grew in {bulk} tets; steel yielded in {plastic} tets (softening or sticking/sliding switches)"
