@@ -33,6 +33,7 @@ fi
 echo "setup: gmsh $("$VENV/bin/python" "$VENV/bin/gmsh" --version 2>&1 | tail -1) at $VENV/bin/gmsh"
 
 if [ "$build" = 1 ]; then
-  cargo build --release --quiet
+  # -p: the root package is the verification suite; a bare build would skip the binary.
+  cargo build --release --quiet -p pipeline --bin ribbar
   echo "setup: built target/release/ribbar"
 fi
