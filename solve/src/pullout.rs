@@ -26,7 +26,9 @@ use crate::assembly::{AssemblyError, ElementLaws, EvalTimings, States, System};
 use crate::interface_element::INTERFACE_POINTS;
 use crate::laws::TangentKind;
 use crate::linear::{dot, gmres, norm, pcg, Cholesky, LinearError, SplitMatrix, SymLower};
-use crate::spec::solver::{Forcing, LinearSolverKind, Loading, Predictor, SolverSettings};
+use crate::spec::solver::{
+    Forcing, LinearSolverKind, Loading, Precision, Predictor, SolverSettings,
+};
 use mesh::{Model, Symmetry};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
@@ -543,12 +545,17 @@ pub fn run(
         }
     }
     let t = Instant::now();
-    let chol = Cholesky::new(
+    let mut chol = Cholesky::new(
         &system.col_ptr,
         &system.row_idx,
         settings.ordering,
         &dof_node,
     )?;
+    if settings.linear_solver == LinearSolverKind::Gmres {
+        chol.set_single_precision_preconditioner(
+            settings.preconditioner_precision == Precision::Single,
+        );
+    }
     wall.factorisation += t.elapsed().as_secs_f64();
     let mut lin = LinearState {
         chol,
