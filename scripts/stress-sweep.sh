@@ -9,8 +9,8 @@ cd "$(dirname "$0")/.."
 WORK="${1:-ribbar-work}"
 JOBS="${2:-2}"
 STUDY=specs/studies/stress-sweep.yaml
-cargo build -p pipeline --bin ribbar --example stress_report || exit 1
+cargo build --release -p pipeline --bin ribbar --example stress_report || exit 1
 # The study exits non-zero when cases stop early; the table says why.
-./target/debug/ribbar study "$STUDY" --work "$WORK" -j "$JOBS" || true
-./target/debug/examples/stress_report "$STUDY" "$WORK" docs/stress-sweep.md \
+./target/release/ribbar study "$STUDY" --work "$WORK" -j "$JOBS" || true
+./target/release/examples/stress_report "$STUDY" "$WORK" docs/stress-sweep.md \
   "scripts/stress-sweep.sh $WORK $JOBS"
