@@ -181,6 +181,7 @@ pub struct RawSolver {
     pub forcing: Option<Forcing>,
     pub predictor: Option<Predictor>,
     pub preconditioner_precision: Option<Precision>,
+    pub stagnation_acceptance: Option<f64>,
 }
 
 /// How the GMRES tolerance of each Newton correction (the forcing term η)
@@ -257,6 +258,11 @@ pub struct SolverSettings {
     pub predictor: Predictor,
     /// Precision of the GMRES preconditioner's triangular solves.
     pub preconditioner_precision: Precision,
+    /// A stagnating attempt (points flipping between law branches) ends on
+    /// its best iterate if that one's relative residual is at most this
+    /// multiple of `residual_tolerance` (≥ 1; 1 = the force criterion
+    /// itself), counted in `force_only_steps`; otherwise it is cut back.
+    pub stagnation_acceptance: f64,
 }
 
 impl Default for SolverSettings {
@@ -276,6 +282,7 @@ impl Default for SolverSettings {
             forcing: Forcing::EisenstatWalker,
             predictor: Predictor::Extrapolate,
             preconditioner_precision: Precision::Single,
+            stagnation_acceptance: 2.0,
         }
     }
 }
@@ -348,6 +355,20 @@ impl RawSolver {
             preconditioner_precision: self
                 .preconditioner_precision
                 .unwrap_or(d.preconditioner_precision),
+            stagnation_acceptance: {
+                let v = self
+                    .stagnation_acceptance
+                    .unwrap_or(d.stagnation_acceptance);
+                if v.is_finite() && v >= 1.0 {
+                    v
+                } else {
+                    return Err(SolverSpecError::OutOfRange {
+                        key: "solver.stagnation_acceptance".into(),
+                        value: v,
+                        bound: "must be ≥ 1 (a multiple of residual_tolerance)",
+                    });
+                }
+            },
         })
     }
 }
@@ -378,6 +399,23 @@ mod tests {
             .unwrap_err()
             .to_string()
             .contains("solver.residual_tolerance"));
+        for bad in ["0.5", ".nan"] {
+            let s: RawSolver =
+                serde_yaml::from_str(&format!("stagnation_acceptance: {bad}")).unwrap();
+            assert!(s
+                .resolve()
+                .unwrap_err()
+                .to_string()
+                .contains("solver.stagnation_acceptance"));
+        }
+        let s: RawSolver =
+            serde_yaml::from_str("stagnation_acceptance: 1\npreconditioner_precision: double")
+                .unwrap();
+        let s = s.resolve().unwrap();
+        assert_eq!(
+            (s.stagnation_acceptance, s.preconditioner_precision),
+            (1.0, Precision::Double)
+        );
         let s: RawSolver = serde_yaml::from_str("tangent: secant\nordering: amd").unwrap();
         let s = s.resolve().unwrap();
         assert_eq!(
