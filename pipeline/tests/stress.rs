@@ -79,3 +79,61 @@ fn extreme_parameters_never_panic_or_mislead() {
     assert!(text.contains("| stress-mini--7 |"), "{text}");
     std::fs::remove_dir_all(&work).unwrap();
 }
+
+/// The small ribbed specimen up to 40 µm (through the adhesion peak): one to
+/// three tets at the Mazars loading/unloading threshold hold Newton in a
+/// two-cycle there. With the default `solver.stagnation_acceptance` (2) the
+/// run reaches the end by ending such a step on its best iterate (counted
+/// in `force_only_steps`) and its energy balance holds; with the strict
+/// criterion (1) the same step is cut down to the minimum size and the run
+/// stops with a reason, its converged steps kept.
+#[test]
+fn threshold_two_cycles_end_on_the_best_iterate() {
+    let work = std::env::temp_dir().join(format!("ribbar-cycle-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&work);
+    let scene = repo().join("tests/data/tiny-ribbed.yaml");
+    let run = |acceptance: &str| {
+        let dir = work.join(acceptance);
+        let out = Command::new(env!("CARGO_BIN_EXE_ribbar"))
+            .args([
+                "run",
+                scene.to_str().unwrap(),
+                "--work",
+                dir.to_str().unwrap(),
+                "--set",
+                "loading.u_final=40um",
+                "--set",
+                &format!("solver.stagnation_acceptance={acceptance}"),
+                "-q",
+            ])
+            .current_dir(repo())
+            .output()
+            .unwrap();
+        let json: serde_json::Value = serde_json::from_str(
+            &std::fs::read_to_string(dir.join("tiny-ribbed/solve.json")).unwrap(),
+        )
+        .unwrap();
+        (out, json)
+    };
+    let (out, solve) = run("2");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_eq!(solve["completed"], true);
+    assert!(
+        solve["summary"]["force_only_steps"].as_u64().unwrap() >= 1,
+        "{solve}"
+    );
+    assert_eq!(solve["energy_check"]["passed"], true);
+    let (out, strict) = run("1");
+    assert!(!out.status.success());
+    assert_eq!(strict["completed"], false);
+    assert!(strict["stopped"]
+        .as_str()
+        .unwrap()
+        .contains("did not converge"));
+    assert!(strict["summary"]["steps"].as_u64().unwrap() >= 1);
+    std::fs::remove_dir_all(&work).unwrap();
+}
