@@ -614,6 +614,7 @@ mod tests {
             Err(LinearError::NotPositiveDefinite { .. })
         ));
     }
+
     /// The single-precision copy of L preconditions like the double one (to
     /// f32 round-off), and GMRES on an unsymmetric matrix reaches a tight
     /// tolerance with it: only the preconditioner is rounded, not the system.
