@@ -198,6 +198,25 @@ fn classic(e0: f64, a: f64, b: f64, kappa: f64) -> (f64, f64) {
     )
 }
 
+/// Σ_i w_i n_i ⊗ n_i over the eigenvectors n_i (columns), as the Voigt
+/// gradient of a scalar of the strain: with engineering shear the
+/// off-diagonal entry is taken once (dγ_xy = 2 dε_xy).
+fn spectral_gradient(eigenvectors: &Matrix3<f64>, weights: [f64; 3]) -> Vector6<f64> {
+    let mut m = Matrix3::zeros();
+    for (i, w) in weights.into_iter().enumerate() {
+        let n = eigenvectors.column(i);
+        m += n * n.transpose() * w;
+    }
+    Vector6::new(
+        m[(0, 0)],
+        m[(1, 1)],
+        m[(2, 2)],
+        m[(0, 1)],
+        m[(1, 2)],
+        m[(0, 2)],
+    )
+}
+
 fn voigt_to_tensor(e: &Vector6<f64>) -> Matrix3<f64> {
     Matrix3::new(
         e[0],
@@ -329,20 +348,9 @@ impl BulkLaw for Mazars {
                     let mut grad = Vector6::zeros();
                     if loading {
                         // dε_eq/dε = ⟨ε⟩₊/ε_eq, in Voigt with engineering shear.
-                        let mut pos = Matrix3::zeros();
-                        for i in 0..3 {
-                            let n = eig.eigenvectors.column(i);
-                            pos += n * n.transpose() * principal[i].max(0.0);
-                        }
-                        let m = pos / eps_eq;
-                        let dk = Vector6::new(
-                            m[(0, 0)],
-                            m[(1, 1)],
-                            m[(2, 2)],
-                            m[(0, 1)],
-                            m[(1, 2)],
-                            m[(0, 2)],
-                        );
+                        let pos = principal.map(|e| e.max(0.0));
+                        let dk =
+                            spectral_gradient(&eig.eigenvectors, [pos[0], pos[1], pos[2]]) / eps_eq;
                         grad += dk * dd_dkappa;
                     }
                     if dd_dalpha != 0.0 {
@@ -352,24 +360,14 @@ impl BulkLaw for Mazars {
                         // values (6 cheap evaluations instead of 12
                         // eigen-decompositions of perturbed tensors).
                         let h = 1e-7 * principal.amax().max(self.eps_d0);
-                        let mut m = Matrix3::zeros();
-                        for i in 0..3 {
+                        let da = [0, 1, 2].map(|i| {
                             let mut p = principal;
                             let mut q = principal;
                             p[i] += h;
                             q[i] -= h;
-                            let da = (self.alpha_t(&p) - self.alpha_t(&q)) / (2.0 * h);
-                            let n = eig.eigenvectors.column(i);
-                            m += n * n.transpose() * da;
-                        }
-                        grad += Vector6::new(
-                            m[(0, 0)],
-                            m[(1, 1)],
-                            m[(2, 2)],
-                            m[(0, 1)],
-                            m[(1, 2)],
-                            m[(0, 2)],
-                        ) * dd_dalpha;
+                            (self.alpha_t(&p) - self.alpha_t(&q)) / (2.0 * h)
+                        });
+                        grad += spectral_gradient(&eig.eigenvectors, da) * dd_dalpha;
                     }
                     t -= effective * grad.transpose();
                 }
