@@ -4,10 +4,19 @@
 
 use pipeline::bench_series::stress_report;
 use std::path::PathBuf;
-use std::process::Command;
+use std::process::{Command, Output};
 
 fn repo() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+/// `ribbar ARGS` from the repository root.
+fn ribbar(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_ribbar"))
+        .args(args)
+        .current_dir(repo())
+        .output()
+        .unwrap()
 }
 
 /// Issue 7 stress tests: for δ_s, μ, ζ, λ_0 at their extremes and a yielding
@@ -20,19 +29,15 @@ fn extreme_parameters_never_panic_or_mislead() {
     let work = std::env::temp_dir().join(format!("ribbar-stress-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&work);
     let study = repo().join("tests/data/stress-mini.yaml");
-    let out = Command::new(env!("CARGO_BIN_EXE_ribbar"))
-        .args([
-            "study",
-            study.to_str().unwrap(),
-            "--work",
-            work.to_str().unwrap(),
-            "-j",
-            "2",
-            "-q",
-        ])
-        .current_dir(repo())
-        .output()
-        .unwrap();
+    let out = ribbar(&[
+        "study",
+        study.to_str().unwrap(),
+        "--work",
+        work.to_str().unwrap(),
+        "-j",
+        "2",
+        "-q",
+    ]);
     // A stopped case makes the study exit non-zero; the report checks why.
     let table = work.join("stress-mini.md");
     let cases = stress_report(&study, &work, &table, "test").unwrap();
@@ -94,21 +99,17 @@ fn threshold_two_cycles_end_on_the_best_iterate() {
     let scene = repo().join("tests/data/tiny-ribbed.yaml");
     let run = |acceptance: &str| {
         let dir = work.join(acceptance);
-        let out = Command::new(env!("CARGO_BIN_EXE_ribbar"))
-            .args([
-                "run",
-                scene.to_str().unwrap(),
-                "--work",
-                dir.to_str().unwrap(),
-                "--set",
-                "loading.u_final=40um",
-                "--set",
-                &format!("solver.stagnation_acceptance={acceptance}"),
-                "-q",
-            ])
-            .current_dir(repo())
-            .output()
-            .unwrap();
+        let out = ribbar(&[
+            "run",
+            scene.to_str().unwrap(),
+            "--work",
+            dir.to_str().unwrap(),
+            "--set",
+            "loading.u_final=40um",
+            "--set",
+            &format!("solver.stagnation_acceptance={acceptance}"),
+            "-q",
+        ]);
         let json: serde_json::Value = serde_json::from_str(
             &std::fs::read_to_string(dir.join("tiny-ribbed/solve.json")).unwrap(),
         )
