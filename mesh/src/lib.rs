@@ -41,12 +41,6 @@ pub const MODEL_FILE: &str = "model.bin";
 pub const VTU_FILE: &str = "mesh.vtu";
 pub const REPORT_FILE: &str = "mesh.json";
 
-fn temp_path(path: &Path) -> PathBuf {
-    let mut name = path.file_name().unwrap_or_default().to_os_string();
-    name.push(format!(".tmp-{}", std::process::id()));
-    path.with_file_name(name)
-}
-
 /// Writes `bytes` to `path` through a temporary file in the same directory
 /// and a rename, so `path` is either the old file or the complete new one.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), MeshError> {
@@ -87,7 +81,7 @@ pub fn mesh_specimen(
     let tmp_msh = out_dir.join(format!("specimen.tmp-{}.msh", std::process::id()));
     let temps = TempFiles(
         std::iter::once(tmp_msh.clone())
-            .chain(finals[1..].iter().map(|p| temp_path(p)))
+            .chain(finals[1..].iter().map(|p| geom::fsutil::temp_sibling(p)))
             .collect(),
     );
 

@@ -290,7 +290,7 @@ fn link_or_copy_atomic(src: &Path, dst: &Path) -> Result<(), StoreError> {
     if same_file(src, dst) {
         return Ok(());
     }
-    let tmp = tmp_name(dst);
+    let tmp = geom::fsutil::temp_sibling(dst);
     let _ = fs::remove_file(&tmp);
     if fs::hard_link(src, &tmp).is_err() {
         fs::copy(src, &tmp).map_err(io_err(&tmp))?;
@@ -314,14 +314,6 @@ fn same_file(a: &Path, b: &Path) -> bool {
 #[cfg(not(unix))]
 fn same_file(_: &Path, _: &Path) -> bool {
     false
-}
-
-fn tmp_name(path: &Path) -> PathBuf {
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    path.with_file_name(format!(".{name}.tmp-{}", std::process::id()))
 }
 
 /// Writes a file so that readers see either the old or the whole new content.
