@@ -159,7 +159,48 @@ fn command_line(kind: &str, args: &BenchArgs) -> String {
     for o in &args.overrides {
         let _ = write!(cmd, " --set '{o}'");
     }
+    for o in &args.sizes {
+        let _ = write!(cmd, " --sizes {o}");
+    }
     cmd
+}
+
+/// Applies the `--sizes SERIES=MM,MM,...` options to the plan.
+fn apply_sizes(plan: &mut [Series], options: &[String]) -> Result<()> {
+    for option in options {
+        let Some((label, list)) = option.split_once('=') else {
+            bail!("--sizes {option}: expected SERIES=MM,MM,... (e.g. R1=1.6,1.2,0.8)");
+        };
+        let Some(series) = plan
+            .iter_mut()
+            .find(|s| s.label.eq_ignore_ascii_case(label.trim()))
+        else {
+            let known: Vec<&str> = plan.iter().map(|s| s.label).collect();
+            bail!(
+                "--sizes {option}: no series `{label}` in this mesh series (series: {})",
+                known.join(", ")
+            );
+        };
+        let mut sizes = Vec::new();
+        for item in list.split(',') {
+            let mm: f64 = item
+                .trim()
+                .parse()
+                .map_err(|_| anyhow::anyhow!("--sizes {option}: `{item}` is not a size in mm"))?;
+            if !(mm.is_finite() && mm > 0.0) {
+                bail!("--sizes {option}: size {mm} mm must be positive");
+            }
+            sizes.push(mm * 1e-3);
+        }
+        if sizes.len() < 3 {
+            bail!(
+                "--sizes {option}: {} sizes given; the GCI needs at least 3",
+                sizes.len()
+            );
+        }
+        series.sizes = sizes;
+    }
+    Ok(())
 }
 
 fn write_text(path: &Path, text: &str) -> Result<()> {
@@ -213,6 +254,8 @@ fn mesh_series_plan(quick: bool) -> Vec<Series> {
 pub fn mesh_series(args: &BenchArgs, printer: &Printer) -> Result<ExitCode> {
     let work = std::path::absolute(&args.work)
         .with_context(|| format!("work directory {}", args.work.display()))?;
+    // Checked before anything runs.
+    apply_sizes(&mut mesh_series_plan(args.quick), &args.sizes)?;
     let mut md = String::new();
     let _ = writeln!(
         md,
@@ -226,9 +269,11 @@ pub fn mesh_series(args: &BenchArgs, printer: &Printer) -> Result<ExitCode> {
          produced the cached artifacts, on this 2-core machine shared with other jobs.\n",
         command_line("mesh-series", args)
     );
+    let mut plan = mesh_series_plan(args.quick);
+    apply_sizes(&mut plan, &args.sizes)?;
     let mut series_plot: Vec<ErrorTimeSeries> = Vec::new();
     let mut any = false;
-    for s in mesh_series_plan(args.quick) {
+    for s in plan {
         let mut records = Vec::new();
         for &h in &s.sizes {
             let mut o = s.extra.clone();
@@ -656,4 +701,38 @@ pub fn stress_report(
     }
     write_text(out, &md)?;
     Ok(cases)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn plan() -> Vec<Series> {
+        mesh_series_plan(false)
+    }
+
+    #[test]
+    fn sizes_option_replaces_one_series_sizes() {
+        let mut p = plan();
+        apply_sizes(&mut p, &["r1=1.6, 1.2,1.0,0.8".into()]).unwrap();
+        let r1 = p.iter().find(|s| s.label == "R1").unwrap();
+        assert_eq!(r1.sizes.len(), 4);
+        assert!((r1.sizes[2] - 1.0e-3).abs() < 1e-15);
+        let smooth = p.iter().find(|s| s.label == "smooth-80").unwrap();
+        assert!((smooth.sizes[3] - 0.4e-3).abs() < 1e-15);
+    }
+
+    #[test]
+    fn sizes_option_names_what_is_wrong() {
+        let err = |o: &str| {
+            apply_sizes(&mut plan(), &[o.to_string()])
+                .unwrap_err()
+                .to_string()
+        };
+        assert!(err("R1").contains("expected SERIES=MM"));
+        assert!(err("R2=1,2,3").contains("no series `R2`"));
+        assert!(err("R1=1.6,x,0.8").contains("`x` is not a size"));
+        assert!(err("R1=1.6,-1,0.8").contains("must be positive"));
+        assert!(err("R1=1.6,0.8").contains("at least 3"));
+    }
 }

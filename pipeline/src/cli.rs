@@ -87,6 +87,11 @@ pub struct BenchArgs {
     /// Small scenes and coarse meshes (seconds; for tests and smoke runs).
     #[arg(long)]
     pub quick: bool,
+    /// mesh-series: interface sizes in mm of one series, e.g.
+    /// `--sizes R1=1.6,1.2,1.0,0.8` (repeatable; the other series keep
+    /// 1.6, 1.2, 0.8, 0.4).
+    #[arg(long = "sizes", value_name = "SERIES=MM,MM,...")]
+    pub sizes: Vec<String>,
 }
 
 #[derive(Debug, Args)]
