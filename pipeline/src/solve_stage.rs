@@ -452,6 +452,16 @@ pub fn run(ctx: &Ctx, mesh_dir: &Path, out: &Path) -> Result<()> {
             );
             (*partial, Some(why))
         }
+        Err(SolveError::StepLimit {
+            max_steps,
+            u_imposed,
+            partial,
+        }) => {
+            let why = format!(
+                "loading.max_steps = {max_steps} converged steps reached at imposed u = {u_imposed:e} m"
+            );
+            (*partial, Some(why))
+        }
         Err(e) => return Err(e.into()),
     };
     if ctx.scene.outputs.fields.at_end {

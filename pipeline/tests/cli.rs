@@ -212,6 +212,7 @@ fn bad_input_is_reported_and_keeps_artifacts() {
         ),
         (&["--set", "mesh.h_outer=0.1 mm"], "mesh.h_outer"),
         (&["--set", "loading.cutback=2"], "loading.cutback"),
+        (&["--set", "loading.max_steps=0"], "loading.max_steps"),
         (&["--set", "bar.diameter"], "KEY=VALUE"),
     ];
     for (extra, needle) in cases {
@@ -251,6 +252,31 @@ fn bad_input_is_reported_and_keeps_artifacts() {
         text(&o)
     );
     assert_eq!(read(&geo), before);
+    std::fs::remove_dir_all(&work).unwrap();
+}
+
+/// `loading.max_steps` ends the solve after that many converged steps: the
+/// curve keeps them, solve.json says why it stopped, `run` exits non-zero,
+/// and a rerun finds the (deterministic) result up to date.
+#[test]
+fn step_limit_keeps_the_converged_steps() {
+    let work = work_dir("steplimit");
+    let w = work.to_str().unwrap();
+    let args = ["run", TINY, "--work", w, "--set", "loading.max_steps=3"];
+    let o = ribbar(&args);
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(1), "{t}");
+    assert!(t.contains("loading.max_steps = 3"), "{t}");
+    assert!(!t.contains("panicked"), "{t}");
+    let curve = read(&work.join("tiny-smooth/curve.csv"));
+    assert_eq!(curve.lines().count(), 1 + 3, "{curve}");
+    let solve: serde_json::Value =
+        serde_json::from_str(&read(&work.join("tiny-smooth/solve.json"))).unwrap();
+    assert_eq!(solve["completed"], false);
+    assert!(solve["stopped"].as_str().unwrap().contains("max_steps"));
+    assert!(work.join("tiny-smooth/plots/bond_slip.png").is_file());
+    let again = text(&ribbar(&args));
+    assert!(stage_line(&again, "solve").contains("up to date"), "{again}");
     std::fs::remove_dir_all(&work).unwrap();
 }
 

@@ -337,6 +337,15 @@ pub enum SolveError {
         cause: String,
         partial: Box<RunResult>,
     },
+    #[error(
+        "loading.max_steps = {max_steps} converged steps reached at imposed displacement \
+         {u_imposed:e} m before the end of the loading"
+    )]
+    StepLimit {
+        max_steps: usize,
+        u_imposed: f64,
+        partial: Box<RunResult>,
+    },
 }
 
 /// Boundary conditions and measurement of the pull-out test (see module doc).
@@ -686,6 +695,21 @@ pub fn run(
             .is_some_and(|s| rows.last().is_some_and(|r: &CurveRow| r.fed >= s));
         if lambda >= loading.u_final - done_eps || fed_done {
             break;
+        }
+        if let Some(max_steps) = loading.max_steps.filter(|&m| rows.len() >= m) {
+            finish(&mut summary, &wall, &lin);
+            let last = make_cp(
+                &u, &committed, &rows, &summary, lambda, h, &lin, &last_inc, last_h,
+            );
+            return Err(SolveError::StepLimit {
+                max_steps,
+                u_imposed: lambda,
+                partial: Box::new(RunResult {
+                    rows,
+                    summary,
+                    last,
+                }),
+            });
         }
         let step = rows.len() + 1;
         let h_try = h.min(loading.u_final - lambda);

@@ -40,6 +40,7 @@ pub struct RawLoading {
     pub growth: Option<f64>,
     pub cutback: Option<f64>,
     pub easy_iterations: Option<usize>,
+    pub max_steps: Option<usize>,
 }
 
 /// Displacement-controlled loading, SI.
@@ -61,6 +62,12 @@ pub struct Loading {
     pub cutback: f64,
     /// A converged step with at most this many iterations is easy.
     pub easy_iterations: usize,
+    /// Stop (with the converged part kept) after this many converged
+    /// steps: a bound on run time that, unlike a wall-clock limit, gives
+    /// the same result on every machine. Left out of the serialised form
+    /// when unset, so that specs without it keep their cache keys.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_steps: Option<usize>,
 }
 
 impl Default for Loading {
@@ -74,6 +81,7 @@ impl Default for Loading {
             growth: 1.5,
             cutback: 0.5,
             easy_iterations: 5,
+            max_steps: None,
         }
     }
 }
@@ -115,6 +123,7 @@ impl RawLoading {
             growth: self.growth.unwrap_or(d.growth),
             cutback: self.cutback.unwrap_or(d.cutback),
             easy_iterations: self.easy_iterations.unwrap_or(d.easy_iterations),
+            max_steps: self.max_steps,
         };
         let bad = |key: &str, value: f64, bound| {
             Err(SolverSpecError::OutOfRange {
@@ -123,6 +132,9 @@ impl RawLoading {
                 bound,
             })
         };
+        if l.max_steps == Some(0) {
+            return bad("loading.max_steps", 0.0, "must be ≥ 1");
+        }
         if !(l.growth >= 1.0 && l.growth.is_finite()) {
             return bad("loading.growth", l.growth, "must be ≥ 1");
         }
