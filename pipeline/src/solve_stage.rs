@@ -281,6 +281,26 @@ impl Observer for StageObserver<'_> {
             r.bond_stress / 1e6,
             r.iterations
         ));
+        let t = &report.times;
+        let residuals: Vec<String> = report
+            .residual_history
+            .iter()
+            .map(|v| format!("{v:.2e}"))
+            .collect();
+        self.ctx.printer.detail(&format!(
+            "solve:   step size {:.3e} m; relative residuals [{}]{}; assembly {:.2} s, constitutive {:.2} s, factorisation {:.2} s, linear solve {:.2} s",
+            report.step_size,
+            residuals.join(", "),
+            if report.force_only {
+                " (stagnating: ended on the best iterate)"
+            } else {
+                ""
+            },
+            t.assembly,
+            t.constitutive,
+            t.factorisation,
+            t.solve
+        ));
         if let Ok(tracker) = &mut self.energy {
             if let Err(e) = tracker.step(r.u_imposed, r.force, view.u, view.states) {
                 self.energy = Err(format!("step {}: {e}", r.step));
@@ -479,6 +499,8 @@ pub fn run(ctx: &Ctx, mesh_dir: &Path, out: &Path) -> Result<()> {
                 row,
                 step_size: 0.0,
                 times: Default::default(),
+                residual_history: Vec::new(),
+                force_only: false,
             };
             observer.write_fields("end", &report, &view)?;
         }

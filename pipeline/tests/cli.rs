@@ -257,16 +257,22 @@ fn bad_input_is_reported_and_keeps_artifacts() {
 
 /// `loading.max_steps` ends the solve after that many converged steps: the
 /// curve keeps them, solve.json says why it stopped, `run` exits non-zero,
-/// and a rerun finds the (deterministic) result up to date.
+/// and a rerun finds the (deterministic) result up to date; `-v` shows
+/// each step's residuals.
 #[test]
 fn step_limit_keeps_the_converged_steps() {
     let work = work_dir("steplimit");
     let w = work.to_str().unwrap();
     let args = ["run", TINY, "--work", w, "--set", "loading.max_steps=3"];
-    let o = ribbar(&args);
+    let mut verbose = args.to_vec();
+    verbose.push("-v");
+    let o = ribbar(&verbose);
     let t = text(&o);
     assert_eq!(o.status.code(), Some(1), "{t}");
     assert!(t.contains("loading.max_steps = 3"), "{t}");
+    // -v: each converged step's residual history and phase times.
+    assert_eq!(t.matches("relative residuals [").count(), 3, "{t}");
+    assert!(t.contains("factorisation"), "{t}");
     assert!(!t.contains("panicked"), "{t}");
     let curve = read(&work.join("tiny-smooth/curve.csv"));
     assert_eq!(curve.lines().count(), 1 + 3, "{curve}");
@@ -276,7 +282,10 @@ fn step_limit_keeps_the_converged_steps() {
     assert!(solve["stopped"].as_str().unwrap().contains("max_steps"));
     assert!(work.join("tiny-smooth/plots/bond_slip.png").is_file());
     let again = text(&ribbar(&args));
-    assert!(stage_line(&again, "solve").contains("up to date"), "{again}");
+    assert!(
+        stage_line(&again, "solve").contains("up to date"),
+        "{again}"
+    );
     std::fs::remove_dir_all(&work).unwrap();
 }
 

@@ -271,13 +271,19 @@ pub struct RunResult {
 }
 
 /// Per converged step, for progress output.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct StepReport {
     pub row: CurveRow,
     /// Step size of the converged attempt, m.
     pub step_size: f64,
     /// Wall times of this step (all attempts).
     pub times: WallTimes,
+    /// Relative residual ‖r‖/F_scale at each iterate of the converged
+    /// attempt (the predictor first).
+    pub residual_history: Vec<f64>,
+    /// The attempt ended on its best iterate of a stagnating iteration
+    /// (counted in `Summary::force_only_steps`).
+    pub force_only: bool,
 }
 
 /// A failed attempt that led to a smaller step.
@@ -792,6 +798,8 @@ pub fn run(
                         row,
                         step_size: h_try,
                         times: step_wall,
+                        residual_history: attempt.history.clone(),
+                        force_only: attempt.force_only,
                     },
                     &view,
                 );
