@@ -27,7 +27,7 @@ use crate::interface_element::INTERFACE_POINTS;
 use crate::laws::TangentKind;
 use crate::linear::{dot, gmres, norm, pcg, Cholesky, LinearError, SplitMatrix, SymLower};
 use crate::spec::solver::{
-    Forcing, LinearSolverKind, Loading, Precision, Predictor, SolverSettings,
+    ConcreteIntegration, Forcing, LinearSolverKind, Loading, Precision, Predictor, SolverSettings,
 };
 use mesh::{Model, Symmetry};
 use serde::{Deserialize, Serialize};
@@ -259,7 +259,7 @@ impl Checkpoint {
     }
 }
 
-const CHECKPOINT_MAGIC: u64 = 0x7269_6262_6172_0002;
+const CHECKPOINT_MAGIC: u64 = 0x7269_6262_6172_0004;
 
 /// A finished (or partial) run.
 #[derive(Debug, Clone, PartialEq)]
@@ -695,6 +695,11 @@ pub fn run(
         let _ = lin;
     };
 
+    // IMPL-EX: the committed states with the extrapolated damage of the
+    // step being attempted.
+    let mut extrapolated =
+        (settings.concrete_integration == ConcreteIntegration::ImplEx).then(|| committed.clone());
+
     loop {
         let fed_done = loading
             .fed_stop
@@ -731,11 +736,19 @@ pub fn run(
                 .for_each(|(v, d)| *v += s * d);
         }
         dirichlet.apply(target, &mut u_trial);
+        if let Some(ex) = extrapolated.as_mut() {
+            ex.clone_from(&committed);
+            let ratio = if last_h > 0.0 { h_try / last_h } else { 0.0 };
+            for (state, law) in ex.bulk.iter_mut().zip(&laws.tets) {
+                *state = law.extrapolate(state, ratio);
+            }
+        }
+        let step_start = extrapolated.as_ref().unwrap_or(&committed);
         let attempt = newton(
             &system,
             laws,
             settings,
-            &committed,
+            step_start,
             &mut trial,
             &mut u_trial,
             &mut f_int,

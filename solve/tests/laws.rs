@@ -561,3 +561,90 @@ fn mazars_virgin_points_below_the_strain_bound_are_elastic() {
     let r = law.step(&virgin, &e, TangentKind::Consistent).unwrap();
     assert!(r.state.damage > 0.0 && r.state.kappa > e0);
 }
+
+/// IMPL-EX (`solver.concrete_integration: impl_ex`): with a stress damage
+/// D̃ in the committed state, the stress is (1 − D̃) C ε and every tangent
+/// the solver asks for is exactly its derivative (the stress is linear in
+/// ε), while κ and D follow the implicit law, so the next extrapolation
+/// starts from the same history; the increment of D is recorded.
+#[test]
+fn mazars_impl_ex_stress_uses_the_extrapolated_damage() {
+    let law = mazars();
+    let c = law.stiffness();
+    let e0 = law.eps_d0;
+    let history = [[1.5 * e0, -0.3 * e0, -0.3 * e0, 0.2 * e0, 0.0, 0.0]];
+    let committed = bulk_history(&law, &history);
+    assert!(committed.damage > 0.0);
+    let strains = [
+        // loading further, unloading, compression
+        Vector6::new(3.0 * e0, -0.6 * e0, -0.6 * e0, 0.5 * e0, 0.1 * e0, 0.0),
+        Vector6::new(0.5 * e0, -0.1 * e0, -0.1 * e0, 0.0, 0.0, 0.0),
+        Vector6::new(-2.0 * e0, 0.4 * e0, 0.4 * e0, 0.0, 0.0, 0.3 * e0),
+    ];
+    for d_explicit in [committed.damage, 0.5 * (1.0 + committed.damage)] {
+        let start = BulkState {
+            explicit_damage: Some(d_explicit),
+            ..committed
+        };
+        for e in strains {
+            let implicit = law.step(&committed, &e, TangentKind::Consistent).unwrap();
+            for kind in [TangentKind::Consistent, TangentKind::Secant] {
+                let r = law.step(&start, &e, kind).unwrap();
+                let expected = c * e * (1.0 - d_explicit);
+                assert!((r.stress - expected).norm() <= 1e-12 * expected.norm(), "{e:?}");
+                assert!((r.tangent - c * (1.0 - d_explicit)).norm() <= 1e-12 * c.norm());
+                let fd = fd_bulk(&law, &start, &e, 1e-9 * e0);
+                assert!((fd - r.tangent).norm() <= 1e-6 * c.norm(), "{e:?}");
+                assert_eq!(r.state.kappa, implicit.state.kappa);
+                assert_eq!(r.state.damage, implicit.state.damage);
+                assert_eq!(
+                    r.state.kappa_increment,
+                    implicit.state.kappa - committed.kappa
+                );
+                assert!((0.0..=1.0).contains(&r.state.alpha_t));
+                assert_eq!(r.state.explicit_damage, Some(d_explicit));
+            }
+        }
+    }
+}
+
+/// IMPL-EX extrapolation: κ̃ = κ + ratio·Δκ through the law's own D(κ, α_t):
+/// ratio 0 gives the committed damage, the extrapolated damage grows with
+/// the ratio, stays in [D, 1] and, for a step like the last one, matches
+/// the implicit damage of continuing the same uniaxial path; laws without
+/// damage are untouched.
+#[test]
+fn mazars_extrapolation_follows_the_softening_law() {
+    let law = mazars();
+    let e0 = law.eps_d0;
+    let uniaxial = |x: f64| Vector6::new(x * e0, -0.2 * x * e0, -0.2 * x * e0, 0.0, 0.0, 0.0);
+    let first = law
+        .step(&BulkState::default(), &uniaxial(1.2), TangentKind::Consistent)
+        .unwrap()
+        .state;
+    let second = law
+        .step(&first, &uniaxial(1.6), TangentKind::Consistent)
+        .unwrap()
+        .state;
+    let third = law
+        .step(&second, &uniaxial(2.0), TangentKind::Consistent)
+        .unwrap()
+        .state;
+    let at = |ratio: f64| law.extrapolate(&second, ratio).explicit_damage.unwrap();
+    assert!((at(0.0) - second.damage).abs() <= 1e-12, "{} vs {}", at(0.0), second.damage);
+    let mut last = at(0.0);
+    for ratio in [0.5, 1.0, 2.0, 10.0, 1e3] {
+        let d = at(ratio);
+        assert!(d >= last && d <= 1.0, "ratio {ratio}: {d}");
+        last = d;
+    }
+    // The same strain increment again: κ grows by the same amount on a
+    // proportional path, so the extrapolation is the implicit answer.
+    assert!((at(1.0) - third.damage).abs() <= 1e-9, "{} vs {}", at(1.0), third.damage);
+    let steel = j2();
+    let s = BulkState {
+        kappa_increment: 1.0,
+        ..BulkState::default()
+    };
+    assert_eq!(steel.extrapolate(&s, 3.0), s);
+}

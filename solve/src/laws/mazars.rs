@@ -292,6 +292,18 @@ impl Mazars {
 }
 
 impl BulkLaw for Mazars {
+    /// κ̃ = κ + ratio·Δκ and D̃ = max(D, D(κ̃, α_t)) with the last α_t:
+    /// extrapolating κ rather than D follows the shape of the softening
+    /// law (D jumps at the threshold and saturates towards 1).
+    fn extrapolate(&self, committed: &BulkState, ratio: f64) -> BulkState {
+        let kappa = committed.kappa.max(self.eps_d0) + ratio * committed.kappa_increment;
+        let (d, _, _) = self.damage(kappa, committed.alpha_t);
+        BulkState {
+            explicit_damage: Some(d.clamp(0.0, 1.0).max(committed.damage)),
+            ..*committed
+        }
+    }
+
     fn step(
         &self,
         committed: &BulkState,
@@ -317,6 +329,7 @@ impl BulkLaw for Mazars {
                     state: BulkState {
                         kappa: self.eps_d0,
                         damage: 0.0,
+                        kappa_increment: 0.0,
                         ..*committed
                     },
                 });
@@ -338,6 +351,30 @@ impl BulkLaw for Mazars {
         let grows = d_trial > committed.damage;
         let d = if grows { d_trial } else { committed.damage };
         let effective = c * strain;
+        if let Some(d_explicit) = committed.explicit_damage {
+            // IMPL-EX (Oliver, Huespe & Cante 2008): the stress uses the
+            // damage extrapolated before the step, so it is linear in the
+            // strain and every tangent kind is the exact (1 − D̃) C; κ and
+            // D are still integrated implicitly, for the next extrapolation.
+            let stress = effective * (1.0 - d_explicit);
+            let tangent = match kind {
+                TangentKind::Elastic => c,
+                TangentKind::Secant | TangentKind::Consistent => c * (1.0 - d_explicit),
+            };
+            check_result(LAW, "stress", stress.as_slice())?;
+            check_result(LAW, "tangent", tangent.as_slice())?;
+            return Ok(BulkResponse {
+                stress,
+                tangent,
+                state: BulkState {
+                    kappa,
+                    damage: d,
+                    kappa_increment: kappa - kappa_c,
+                    alpha_t,
+                    ..*committed
+                },
+            });
+        }
         let stress = effective * (1.0 - d);
         let tangent = match kind {
             TangentKind::Elastic => c,
@@ -382,6 +419,8 @@ impl BulkLaw for Mazars {
             state: BulkState {
                 kappa,
                 damage: d,
+                kappa_increment: kappa - kappa_c,
+                alpha_t,
                 ..*committed
             },
         })

@@ -58,6 +58,17 @@ pub struct BulkState {
     pub damage: f64,
     /// J2: plastic strain (Voigt, engineering shear).
     pub plastic_strain: [f64; 6],
+    /// Mazars, IMPL-EX integration (`solver.concrete_integration: impl_ex`):
+    /// the damage the stress uses in this step, extrapolated by the solver
+    /// from the implicit history before the step; `None`: implicit
+    /// integration (the stress uses `damage`).
+    pub explicit_damage: Option<f64>,
+    /// Mazars, IMPL-EX: increment of κ in the step that produced this
+    /// state (the rate the next extrapolation uses).
+    pub kappa_increment: f64,
+    /// Mazars, IMPL-EX: α_t of the strain of this state (the tension weight
+    /// of the next extrapolated damage).
+    pub alpha_t: f64,
 }
 
 /// Result of a bulk step.
@@ -95,6 +106,13 @@ pub trait BulkLaw: Sync {
         strain: &Vector6<f64>,
         kind: TangentKind,
     ) -> Result<BulkResponse, LawError>;
+
+    /// IMPL-EX: the committed state prepared for a step `ratio` times as
+    /// long as the one that produced it (`explicit_damage` set); laws
+    /// without damage return it unchanged.
+    fn extrapolate(&self, committed: &BulkState, _ratio: f64) -> BulkState {
+        *committed
+    }
 }
 
 /// An interface constitutive law in the local frame.
@@ -210,6 +228,14 @@ impl BulkLaw for AnyBulkLaw {
             AnyBulkLaw::Mazars(l) => l.step(committed, strain, kind),
             AnyBulkLaw::J2(l) => l.step(committed, strain, kind),
             AnyBulkLaw::Elastic(l) => l.step(committed, strain, kind),
+        }
+    }
+
+    fn extrapolate(&self, committed: &BulkState, ratio: f64) -> BulkState {
+        match self {
+            AnyBulkLaw::Mazars(l) => l.extrapolate(committed, ratio),
+            AnyBulkLaw::J2(l) => l.extrapolate(committed, ratio),
+            AnyBulkLaw::Elastic(l) => l.extrapolate(committed, ratio),
         }
     }
 }
