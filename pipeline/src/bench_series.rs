@@ -244,7 +244,13 @@ fn mesh_series_plan(quick: bool) -> Vec<Series> {
                 label: "R1",
                 spec: repo_file("specs/r1-coarse.yaml"),
                 sizes,
-                extra: vec![],
+                // As specs/studies/r1-convergence.yaml (and specs/r1.yaml):
+                // the 0.4 mm grid needs IMPL-EX, and one series one
+                // integration.
+                extra: vec![
+                    "solver.concrete_integration=impl_ex".into(),
+                    "solver.impl_ex_tolerance=3e-2".into(),
+                ],
             },
         ]
     }
@@ -451,21 +457,21 @@ pub fn solver_variants() -> Vec<(&'static str, Vec<&'static str>)> {
             vec!["solver.preconditioner_precision=double"],
         ),
         (
-            "IMPL-EX concrete",
+            "IMPL-EX concrete (tolerance 1e-2)",
             vec!["solver.concrete_integration=impl_ex"],
         ),
         (
-            "IMPL-EX concrete, max step 20 µm",
+            "IMPL-EX concrete, tolerance 3e-2",
             vec![
                 "solver.concrete_integration=impl_ex",
-                "loading.max_step=\"20 um\"",
+                "solver.impl_ex_tolerance=3e-2",
             ],
         ),
         (
-            "IMPL-EX concrete, max step 10 µm",
+            "IMPL-EX concrete, no step control",
             vec![
                 "solver.concrete_integration=impl_ex",
-                "loading.max_step=\"10 um\"",
+                "solver.impl_ex_tolerance=1e9",
             ],
         ),
     ]

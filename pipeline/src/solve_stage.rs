@@ -288,7 +288,7 @@ impl Observer for StageObserver<'_> {
             .map(|v| format!("{v:.2e}"))
             .collect();
         self.ctx.printer.detail(&format!(
-            "solve:   step size {:.3e} m; relative residuals [{}]{}; assembly {:.2} s, constitutive {:.2} s, factorisation {:.2} s, linear solve {:.2} s",
+            "solve:   step size {:.3e} m; relative residuals [{}]{}{}; assembly {:.2} s, constitutive {:.2} s, factorisation {:.2} s, linear solve {:.2} s",
             report.step_size,
             residuals.join(", "),
             if report.force_only {
@@ -296,6 +296,10 @@ impl Observer for StageObserver<'_> {
             } else {
                 ""
             },
+            report
+                .impl_ex_residual
+                .map(|e| format!("; IMPL-EX residual under the implicit damage {e:.2e}"))
+                .unwrap_or_default(),
             t.assembly,
             t.constitutive,
             t.factorisation,
@@ -501,6 +505,7 @@ pub fn run(ctx: &Ctx, mesh_dir: &Path, out: &Path) -> Result<()> {
                 times: Default::default(),
                 residual_history: Vec::new(),
                 force_only: false,
+                impl_ex_residual: None,
             };
             observer.write_fields("end", &report, &view)?;
         }

@@ -171,6 +171,11 @@ pub struct Summary {
     /// criterion out of reach).
     #[serde(default)]
     pub force_only_steps: usize,
+    /// IMPL-EX: the largest relative residual of a converged step's
+    /// displacement under the implicit damage (see
+    /// `SolverSettings::impl_ex_tolerance`); 0 for implicit integration.
+    #[serde(default)]
+    pub impl_ex_max_residual: f64,
     pub wall_time_s: WallTimes,
 }
 
@@ -259,7 +264,7 @@ impl Checkpoint {
     }
 }
 
-const CHECKPOINT_MAGIC: u64 = 0x7269_6262_6172_0004;
+const CHECKPOINT_MAGIC: u64 = 0x7269_6262_6172_0005;
 
 /// A finished (or partial) run.
 #[derive(Debug, Clone, PartialEq)]
@@ -284,6 +289,10 @@ pub struct StepReport {
     /// The attempt ended on its best iterate of a stagnating iteration
     /// (counted in `Summary::force_only_steps`).
     pub force_only: bool,
+    /// IMPL-EX: relative residual of the converged displacement under the
+    /// implicit damage (the extrapolation error of the step); `None` for
+    /// implicit integration.
+    pub impl_ex_residual: Option<f64>,
 }
 
 /// A failed attempt that led to a smaller step.
@@ -793,6 +802,32 @@ pub fn run(
                 } else {
                     h = h_try;
                 }
+                let impl_ex_residual = match extrapolated.as_mut() {
+                    Some(scratch) => {
+                        let t = Instant::now();
+                        let e = implicit_residual(
+                            &system, laws, &committed, &u, scratch, &mut trial, &mut f_int,
+                        );
+                        let spent = t.elapsed().as_secs_f64();
+                        step_wall.constitutive += spent;
+                        wall.constitutive += spent;
+                        let e = match e {
+                            Ok(e) => e,
+                            Err(err) => return Err(err.into()),
+                        };
+                        summary.impl_ex_max_residual = summary.impl_ex_max_residual.max(e);
+                        // The extrapolation error of a step grows like the
+                        // square of its size.
+                        if e > settings.impl_ex_tolerance {
+                            let shrink = (settings.impl_ex_tolerance / e).sqrt() * 0.9;
+                            h = (h_try * shrink.max(loading.cutback))
+                                .max(loading.min_step)
+                                .min(h);
+                        }
+                        Some(e)
+                    }
+                    None => None,
+                };
                 finish(&mut summary, &wall, &lin);
                 let cp = || {
                     make_cp(
@@ -813,6 +848,7 @@ pub fn run(
                         times: step_wall,
                         residual_history: attempt.history.clone(),
                         force_only: attempt.force_only,
+                        impl_ex_residual,
                     },
                     &view,
                 );
@@ -861,6 +897,36 @@ pub fn run(
         summary,
         last,
     })
+}
+
+/// IMPL-EX error indicator of a converged step: the residual of the
+/// converged displacement `u` when every concrete point takes the damage
+/// its implicit history reached in the step instead of the extrapolated
+/// one (what an implicit Newton iteration would see there), relative to
+/// the reaction like the force criterion. Overwrites `scratch`, `trial` and
+/// `f_int` (`f_int` is left with the implicit internal forces).
+fn implicit_residual(
+    system: &System,
+    laws: &ElementLaws,
+    committed: &States,
+    u: &[f64],
+    scratch: &mut States,
+    trial: &mut States,
+    f_int: &mut [f64],
+) -> Result<f64, AssemblyError> {
+    scratch.clone_from(committed);
+    for s in &mut scratch.bulk {
+        s.explicit_damage = Some(s.damage);
+    }
+    system.evaluate(laws, u, scratch, trial, TangentKind::Secant, f_int, None)?;
+    let dofs = system.dofs();
+    let free: f64 = (0..dofs.n_total())
+        .filter(|&d| dofs.free_index(d).is_some())
+        .map(|d| f_int[d] * f_int[d])
+        .sum::<f64>()
+        .sqrt();
+    let reaction = reaction_norm(system, f_int);
+    Ok(free / if reaction > 0.0 { reaction } else { 1.0 })
 }
 
 /// How many points changed by `changed` from their committed state.

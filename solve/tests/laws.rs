@@ -591,7 +591,10 @@ fn mazars_impl_ex_stress_uses_the_extrapolated_damage() {
             for kind in [TangentKind::Consistent, TangentKind::Secant] {
                 let r = law.step(&start, &e, kind).unwrap();
                 let expected = c * e * (1.0 - d_explicit);
-                assert!((r.stress - expected).norm() <= 1e-12 * expected.norm(), "{e:?}");
+                assert!(
+                    (r.stress - expected).norm() <= 1e-12 * expected.norm(),
+                    "{e:?}"
+                );
                 assert!((r.tangent - c * (1.0 - d_explicit)).norm() <= 1e-12 * c.norm());
                 let fd = fd_bulk(&law, &start, &e, 1e-9 * e0);
                 assert!((fd - r.tangent).norm() <= 1e-6 * c.norm(), "{e:?}");
@@ -619,7 +622,11 @@ fn mazars_extrapolation_follows_the_softening_law() {
     let e0 = law.eps_d0;
     let uniaxial = |x: f64| Vector6::new(x * e0, -0.2 * x * e0, -0.2 * x * e0, 0.0, 0.0, 0.0);
     let first = law
-        .step(&BulkState::default(), &uniaxial(1.2), TangentKind::Consistent)
+        .step(
+            &BulkState::default(),
+            &uniaxial(1.2),
+            TangentKind::Consistent,
+        )
         .unwrap()
         .state;
     let second = law
@@ -631,7 +638,12 @@ fn mazars_extrapolation_follows_the_softening_law() {
         .unwrap()
         .state;
     let at = |ratio: f64| law.extrapolate(&second, ratio).explicit_damage.unwrap();
-    assert!((at(0.0) - second.damage).abs() <= 1e-12, "{} vs {}", at(0.0), second.damage);
+    assert!(
+        (at(0.0) - second.damage).abs() <= 1e-12,
+        "{} vs {}",
+        at(0.0),
+        second.damage
+    );
     let mut last = at(0.0);
     for ratio in [0.5, 1.0, 2.0, 10.0, 1e3] {
         let d = at(ratio);
@@ -640,7 +652,12 @@ fn mazars_extrapolation_follows_the_softening_law() {
     }
     // The same strain increment again: κ grows by the same amount on a
     // proportional path, so the extrapolation is the implicit answer.
-    assert!((at(1.0) - third.damage).abs() <= 1e-9, "{} vs {}", at(1.0), third.damage);
+    assert!(
+        (at(1.0) - third.damage).abs() <= 1e-9,
+        "{} vs {}",
+        at(1.0),
+        third.damage
+    );
     let steel = j2();
     let s = BulkState {
         kappa_increment: 1.0,

@@ -195,6 +195,7 @@ pub struct RawSolver {
     pub preconditioner_precision: Option<Precision>,
     pub stagnation_acceptance: Option<f64>,
     pub concrete_integration: Option<ConcreteIntegration>,
+    pub impl_ex_tolerance: Option<f64>,
 }
 
 /// How the GMRES tolerance of each Newton correction (the forcing term η)
@@ -298,10 +299,31 @@ pub struct SolverSettings {
     /// form when implicit, so that specs without it keep their cache keys.
     #[serde(default, skip_serializing_if = "is_implicit")]
     pub concrete_integration: ConcreteIntegration,
+    /// IMPL-EX step control: after a converged step, the residual of its
+    /// displacement under the implicit damage, relative to the reaction,
+    /// is compared with this; above it the next step shrinks by
+    /// 0.9 √(tol/e) (at least by `loading.cutback`). Left out of the
+    /// serialised form at its default.
+    #[serde(
+        default = "default_impl_ex_tolerance",
+        skip_serializing_if = "is_default_impl_ex_tolerance"
+    )]
+    pub impl_ex_tolerance: f64,
 }
 
 fn is_implicit(c: &ConcreteIntegration) -> bool {
     *c == ConcreteIntegration::Implicit
+}
+
+/// Default of `solver.impl_ex_tolerance` (docs/solver.md, IMPL-EX).
+pub const DEFAULT_IMPL_EX_TOLERANCE: f64 = 1e-2;
+
+fn default_impl_ex_tolerance() -> f64 {
+    DEFAULT_IMPL_EX_TOLERANCE
+}
+
+fn is_default_impl_ex_tolerance(v: &f64) -> bool {
+    *v == DEFAULT_IMPL_EX_TOLERANCE
 }
 
 impl Default for SolverSettings {
@@ -323,6 +345,7 @@ impl Default for SolverSettings {
             preconditioner_precision: Precision::Single,
             stagnation_acceptance: 2.0,
             concrete_integration: ConcreteIntegration::Implicit,
+            impl_ex_tolerance: DEFAULT_IMPL_EX_TOLERANCE,
         }
     }
 }
@@ -409,9 +432,19 @@ impl RawSolver {
                     });
                 }
             },
-            concrete_integration: self
-                .concrete_integration
-                .unwrap_or(d.concrete_integration),
+            concrete_integration: self.concrete_integration.unwrap_or(d.concrete_integration),
+            impl_ex_tolerance: {
+                let v = self.impl_ex_tolerance.unwrap_or(d.impl_ex_tolerance);
+                if v.is_finite() && v > 0.0 {
+                    v
+                } else {
+                    return Err(SolverSpecError::OutOfRange {
+                        key: "solver.impl_ex_tolerance".into(),
+                        value: v,
+                        bound: "must be > 0",
+                    });
+                }
+            },
         })
     }
 }
