@@ -422,7 +422,10 @@ pub fn solver_variants() -> Vec<(&'static str, Vec<&'static str>)> {
     vec![
         (
             "reference: max step 10 µm",
-            vec!["loading.max_step=\"10 um\"", "loading.initial_step=\"2 um\""],
+            vec![
+                "loading.max_step=\"10 um\"",
+                "loading.initial_step=\"2 um\"",
+            ],
         ),
         ("defaults", vec![]),
         ("residual 1e-3", vec!["solver.residual_tolerance=1e-3"]),

@@ -807,14 +807,10 @@ pub fn run(
                         let t = Instant::now();
                         let e = implicit_residual(
                             &system, laws, &committed, &u, scratch, &mut trial, &mut f_int,
-                        );
+                        )?;
                         let spent = t.elapsed().as_secs_f64();
                         step_wall.constitutive += spent;
                         wall.constitutive += spent;
-                        let e = match e {
-                            Ok(e) => e,
-                            Err(err) => return Err(err.into()),
-                        };
                         summary.impl_ex_max_residual = summary.impl_ex_max_residual.max(e);
                         // A linear extrapolation's error grows like h² on a
                         // smooth history; near R1's adhesion peak it was
