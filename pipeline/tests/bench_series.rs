@@ -57,7 +57,7 @@ fn mesh_series_writes_table_gci_and_plot() {
 }
 
 /// Issue 7 solver settings: every variant is timed and compared with the
-/// tight-tolerance reference (its own distance is 0, the others' finite).
+/// reference run (its own distance is 0, the others' finite).
 #[test]
 fn solver_settings_compares_against_the_reference() {
     let work = std::env::temp_dir().join(format!("ribbar-bench-settings-{}", std::process::id()));
