@@ -512,7 +512,7 @@ pub fn solver_settings(args: &BenchArgs, printer: &Printer) -> Result<ExitCode> 
         md,
         "# Solver settings: run time against curve error ({label})\n\n\
          Command: `{}`\n\n\
-         One mesh ({}), one run per setting; the first row is the tight-tolerance reference. \
+         One mesh ({}), one run per setting; the first row is the reference (10 µm steps; docs/performance.md). \
          Curve error: relative L2 distance of σ_mb along the imposed displacement to the \
          reference's, over their common range (`post::curve_distance`); peak error: relative \
          difference of the peak σ_mb. Solve wall time of the run (2 shared cores).\n",

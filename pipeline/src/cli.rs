@@ -66,7 +66,7 @@ pub enum BenchKind {
     Linear,
     /// Mesh series (h_interface 1.6 → 0.4 mm) on smooth-80 and R1 with GCI.
     MeshSeries,
-    /// Solver settings on R1 at a fixed mesh against a tight-tolerance run.
+    /// Solver settings on R1 at a fixed mesh against a small-step reference run.
     SolverSettings,
 }
 
