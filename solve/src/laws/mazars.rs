@@ -351,37 +351,18 @@ impl BulkLaw for Mazars {
         let grows = d_trial > committed.damage;
         let d = if grows { d_trial } else { committed.damage };
         let effective = c * strain;
-        if let Some(d_explicit) = committed.explicit_damage {
-            // IMPL-EX (Oliver, Huespe & Cante 2008): the stress uses the
-            // damage extrapolated before the step, so it is linear in the
-            // strain and every tangent kind is the exact (1 − D̃) C; κ and
-            // D are still integrated implicitly, for the next extrapolation.
-            let stress = effective * (1.0 - d_explicit);
-            let tangent = match kind {
-                TangentKind::Elastic => c,
-                TangentKind::Secant | TangentKind::Consistent => c * (1.0 - d_explicit),
-            };
-            check_result(LAW, "stress", stress.as_slice())?;
-            check_result(LAW, "tangent", tangent.as_slice())?;
-            return Ok(BulkResponse {
-                stress,
-                tangent,
-                state: BulkState {
-                    kappa,
-                    damage: d,
-                    kappa_increment: kappa - kappa_c,
-                    alpha_t,
-                    ..*committed
-                },
-            });
-        }
-        let stress = effective * (1.0 - d);
+        // IMPL-EX (Oliver, Huespe & Cante 2008): the stress uses the damage
+        // extrapolated before the step, so it is linear in the strain and
+        // the secant (1 − D̃) C is its exact tangent; κ and D are still
+        // integrated implicitly, for the next extrapolation.
+        let d_stress = committed.explicit_damage.unwrap_or(d);
+        let stress = effective * (1.0 - d_stress);
         let tangent = match kind {
             TangentKind::Elastic => c,
-            TangentKind::Secant => c * (1.0 - d),
+            TangentKind::Secant => c * (1.0 - d_stress),
             TangentKind::Consistent => {
-                let mut t = c * (1.0 - d);
-                if grows && d_trial < 1.0 {
+                let mut t = c * (1.0 - d_stress);
+                if committed.explicit_damage.is_none() && grows && d_trial < 1.0 {
                     let mut grad = Vector6::zeros();
                     if loading {
                         // dε_eq/dε = ⟨ε⟩₊/ε_eq, in Voigt with engineering shear.
