@@ -3,7 +3,7 @@
 //! child process, then checked by `bench_series::stress_report`.
 
 use pipeline::bench_series::stress_report;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 fn repo() -> PathBuf {
@@ -17,6 +17,25 @@ fn ribbar(args: &[&str]) -> Output {
         .current_dir(repo())
         .output()
         .unwrap()
+}
+
+/// `ribbar run tests/data/tiny-ribbed.yaml --work DIR -q EXTRA...`: its
+/// output and the scene's solve.json.
+fn run_tiny_ribbed(dir: &Path, extra: &[&str]) -> (Output, serde_json::Value) {
+    let scene = repo().join("tests/data/tiny-ribbed.yaml");
+    let mut args = vec![
+        "run",
+        scene.to_str().unwrap(),
+        "--work",
+        dir.to_str().unwrap(),
+        "-q",
+    ];
+    args.extend_from_slice(extra);
+    let out = ribbar(&args);
+    let solve =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("tiny-ribbed/solve.json")).unwrap())
+            .unwrap();
+    (out, solve)
 }
 
 /// Issue 7 stress tests: for δ_s, μ, ζ, λ_0 at their extremes and a yielding
@@ -96,25 +115,16 @@ fn extreme_parameters_never_panic_or_mislead() {
 fn threshold_two_cycles_end_on_the_best_iterate() {
     let work = std::env::temp_dir().join(format!("ribbar-cycle-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&work);
-    let scene = repo().join("tests/data/tiny-ribbed.yaml");
     let run = |acceptance: &str| {
-        let dir = work.join(acceptance);
-        let out = ribbar(&[
-            "run",
-            scene.to_str().unwrap(),
-            "--work",
-            dir.to_str().unwrap(),
-            "--set",
-            "loading.u_final=40um",
-            "--set",
-            &format!("solver.stagnation_acceptance={acceptance}"),
-            "-q",
-        ]);
-        let json: serde_json::Value = serde_json::from_str(
-            &std::fs::read_to_string(dir.join("tiny-ribbed/solve.json")).unwrap(),
+        run_tiny_ribbed(
+            &work.join(acceptance),
+            &[
+                "--set",
+                "loading.u_final=40um",
+                "--set",
+                &format!("solver.stagnation_acceptance={acceptance}"),
+            ],
         )
-        .unwrap();
-        (out, json)
     };
     let (out, solve) = run("2");
     assert!(
@@ -150,22 +160,9 @@ fn impl_ex_concrete_runs_through_the_threshold_two_cycles() {
     use pipeline::post::{curve_distance, read_curve_csv, CurveAxis};
     let work = std::env::temp_dir().join(format!("ribbar-implex-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&work);
-    let scene = repo().join("tests/data/tiny-ribbed.yaml");
     let run = |label: &str, extra: &[&str]| {
         let dir = work.join(label);
-        let mut args = vec![
-            "run",
-            scene.to_str().unwrap(),
-            "--work",
-            dir.to_str().unwrap(),
-            "-q",
-        ];
-        args.extend_from_slice(extra);
-        let out = ribbar(&args);
-        let solve: serde_json::Value = serde_json::from_str(
-            &std::fs::read_to_string(dir.join("tiny-ribbed/solve.json")).unwrap(),
-        )
-        .unwrap();
+        let (out, solve) = run_tiny_ribbed(&dir, extra);
         let curve = read_curve_csv(&dir.join("tiny-ribbed/curve.csv")).unwrap();
         (out, solve, curve)
     };
