@@ -917,14 +917,10 @@ fn implicit_residual(
         s.explicit_damage = Some(s.damage);
     }
     system.evaluate(laws, u, scratch, trial, TangentKind::Secant, f_int, None)?;
-    let dofs = system.dofs();
-    let free: f64 = (0..dofs.n_total())
-        .filter(|&d| dofs.free_index(d).is_some())
-        .map(|d| f_int[d] * f_int[d])
-        .sum::<f64>()
-        .sqrt();
+    let mut r = vec![0.0; system.dofs().n_free()];
+    residual(system.dofs(), f_int, &mut r);
     let reaction = reaction_norm(system, f_int);
-    Ok(free / if reaction > 0.0 { reaction } else { 1.0 })
+    Ok(norm(&r) / if reaction > 0.0 { reaction } else { 1.0 })
 }
 
 /// How many points changed by `changed` from their committed state.
