@@ -18,7 +18,7 @@ use solve::assembly::{ElementLaws, SharedBulkLaw, SharedInterfaceLaw};
 use solve::energy::{EnergyRow, EnergyTracker, ZoneRules, ENERGY_TOLERANCE};
 use solve::interface_element::{InterfaceKernel, INTERFACE_POINTS};
 use solve::laws::{InterfaceLaw, TangentKind};
-use solve::pullout::{
+use solve::nonlinear::{
     Checkpoint, CommittedView, CurveRow, Cutback, Observer, SolveError, StepReport,
 };
 use std::io::Write;
@@ -448,7 +448,7 @@ pub fn run(ctx: &Ctx, mesh_dir: &Path, out: &Path) -> Result<()> {
         energy,
         energy_path: energy_path.clone(),
     };
-    let outcome = solve::pullout::solve_pullout(
+    let outcome = solve::problems::pullout::solve_pullout(
         &model,
         &laws,
         &ctx.scene.loading,

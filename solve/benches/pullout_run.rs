@@ -15,7 +15,8 @@
 
 use mesh::Model;
 use solve::assembly::{ElementLaws, SharedBulkLaw, SharedInterfaceLaw};
-use solve::pullout::{solve_pullout, CommittedView, Cutback, Observer, StepReport};
+use solve::nonlinear::{Checkpoint, CommittedView, Cutback, Observer, SolveError, StepReport};
+use solve::problems::pullout::solve_pullout;
 use solve::spec::materials::RawMaterials;
 use solve::spec::solver::{RawLoading, RawSolver};
 use std::sync::Arc;
@@ -137,15 +138,13 @@ fn main() {
     let mut resume = None;
     match (opt("save_at"), opt("checkpoint")) {
         (Some(n), Some(p)) => print.save = Some((n.parse().expect("bench.save_at"), p.into())),
-        (None, Some(p)) => {
-            resume = Some(solve::pullout::Checkpoint::load(p.as_ref()).expect("checkpoint"))
-        }
+        (None, Some(p)) => resume = Some(Checkpoint::load(p.as_ref()).expect("checkpoint")),
         _ => {}
     }
     let res = solve_pullout(&model, &laws, &loading, &settings, resume, &mut print);
     let summary = match &res {
         Ok(r) => r.summary.clone(),
-        Err(solve::pullout::SolveError::Stalled { partial, .. }) => {
+        Err(SolveError::Stalled { partial, .. }) => {
             println!("stalled: {}", res.as_ref().err().unwrap());
             partial.summary.clone()
         }

@@ -10,5 +10,6 @@ pub mod laws;
 pub mod linear;
 pub mod linear_elastic;
 pub mod material_point;
-pub mod pullout;
+pub mod nonlinear;
+pub mod problems;
 pub mod spec;

@@ -9,10 +9,11 @@ use solve::laws::fczm::{Fczm, DEFAULT_GAMMA};
 use solve::laws::tvergaard::Tvergaard;
 use solve::laws::{InterfaceLaw, InterfaceState, TangentKind};
 use solve::linear::Ordering;
-use solve::pullout::{
-    run, solve_pullout, CommittedView, Dirichlet, Measurement, Observer, Silent, SolveError,
+use solve::nonlinear::{
+    run, CommittedView, Dirichlet, Measurement, Observer, Silent, SolveError, StepFailure,
     StepReport,
 };
+use solve::problems::pullout::solve_pullout;
 use solve::spec::solver::{Forcing, LinearSolverKind, Loading, SolverSettings};
 use std::sync::Arc;
 
@@ -600,7 +601,7 @@ fn resume_equals_uninterrupted() {
 /// Runs uninterrupted, and again from a saved checkpoint of step 4; the
 /// curves must agree bit for bit (the kept preconditioner is restored).
 fn resume_case(m: &Model, laws: &ElementLaws, loading: &Loading, settings: &SolverSettings) {
-    struct Grab(usize, Option<solve::pullout::Checkpoint>);
+    struct Grab(usize, Option<solve::nonlinear::Checkpoint>);
     impl Observer for Grab {
         fn step_converged(&mut self, r: &StepReport, v: &CommittedView<'_>) {
             if r.row.step == self.0 {
@@ -614,7 +615,7 @@ fn resume_case(m: &Model, laws: &ElementLaws, loading: &Loading, settings: &Solv
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("state.bin");
     grab.1.unwrap().save(&path).unwrap();
-    let cp = solve::pullout::Checkpoint::load(&path).unwrap();
+    let cp = solve::nonlinear::Checkpoint::load(&path).unwrap();
     let resumed = solve_pullout(m, laws, loading, settings, Some(cp), &mut Silent).unwrap();
     std::fs::remove_dir_all(&dir).ok();
     assert_eq!(full.rows.len(), resumed.rows.len());
@@ -697,8 +698,14 @@ fn diverging_case_keeps_converged_steps() {
             u_imposed,
             residual_history,
             partial,
+            cause,
             ..
         }) => {
+            // Two iterations per attempt: the typed cause says so.
+            assert!(
+                matches!(*cause, StepFailure::IterationLimit { iterations: 2, .. }),
+                "{cause}"
+            );
             assert_eq!(step, partial.rows.len() + 1);
             assert!(u_imposed > partial.last.u_imposed);
             assert!(!residual_history.is_empty());
@@ -708,7 +715,7 @@ fn diverging_case_keeps_converged_steps() {
                 u_imposed,
                 step_size: 0.0,
                 residual_history,
-                cause: "x".into(),
+                cause,
                 partial,
             }
             .to_string();
@@ -1000,7 +1007,7 @@ fn newton_krylov_beats_secant_iterations_in_softening() {
         .unwrap()
         .step;
     assert!(peak_step < nk.rows.len() - 3, "no softening branch");
-    let its = |r: &solve::pullout::RunResult| r.summary.total_iterations;
+    let its = |r: &solve::nonlinear::RunResult| r.summary.total_iterations;
     eprintln!(
         "iterations: Newton–Krylov {}, secant {}, symmetric part {}",
         its(&nk),

@@ -1,0 +1,119 @@
+//! Everything needed to restart a run from a converged step, saved
+//! atomically (bincode behind a format tag).
+
+use super::report::{CurveRow, Summary};
+use crate::assembly::States;
+use crate::interface_element::INTERFACE_POINTS;
+use mesh::Model;
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+/// Everything needed to restart from a converged step.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Checkpoint {
+    pub n_nodes: usize,
+    pub n_tets: usize,
+    pub n_interfaces: usize,
+    /// λ of the last converged step, m.
+    pub u_imposed: f64,
+    /// Size of the next step to try, m.
+    pub next_step: f64,
+    /// Global displacement, m.
+    pub u: Vec<f64>,
+    pub states: States,
+    pub rows: Vec<CurveRow>,
+    pub summary: Summary,
+    /// The matrix whose factor preconditions the next linear solves (PCG
+    /// and GMRES keep one across steps); a resumed run factorises exactly
+    /// these values, so its iterates equal the uninterrupted run's bit for
+    /// bit. `None` when no factor is kept (Cholesky mode, or none yet).
+    pub preconditioner: Option<PreconditionerState>,
+    /// Global displacement increment of the last converged step (m; empty
+    /// before the first), for the extrapolating predictor.
+    pub last_increment: Vec<f64>,
+    /// Size of the last converged step, m (0 before the first).
+    pub last_step: f64,
+}
+
+/// The kept preconditioner of a run: the lower-triangle values (N/m) that
+/// were factorised, and whether the solver had decided to refactorise at
+/// its next correction.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PreconditionerState {
+    pub values: Vec<f64>,
+    pub refactor: bool,
+}
+
+/// A checkpoint file that cannot be written or read.
+#[derive(Debug, thiserror::Error)]
+pub enum CheckpointError {
+    #[error("checkpoint {path}: {source}")]
+    Io {
+        path: String,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("checkpoint {path}: corrupt or of another version ({detail})")]
+    Corrupt { path: String, detail: String },
+}
+
+const CHECKPOINT_MAGIC: u64 = 0x7269_6262_6172_0005;
+
+impl Checkpoint {
+    /// Writes atomically (temporary file then rename), bincode.
+    pub fn save(&self, path: &Path) -> Result<(), CheckpointError> {
+        let io = |source| CheckpointError::Io {
+            path: path.display().to_string(),
+            source,
+        };
+        let bytes = bincode::serialize(&(CHECKPOINT_MAGIC, self)).map_err(|e| {
+            CheckpointError::Corrupt {
+                path: path.display().to_string(),
+                detail: e.to_string(),
+            }
+        })?;
+        geom::fsutil::write_atomic(path, &bytes).map_err(io)
+    }
+
+    pub fn load(path: &Path) -> Result<Self, CheckpointError> {
+        let bytes = std::fs::read(path).map_err(|source| CheckpointError::Io {
+            path: path.display().to_string(),
+            source,
+        })?;
+        let (magic, cp): (u64, Checkpoint) =
+            bincode::deserialize(&bytes).map_err(|e| CheckpointError::Corrupt {
+                path: path.display().to_string(),
+                detail: e.to_string(),
+            })?;
+        if magic != CHECKPOINT_MAGIC {
+            return Err(CheckpointError::Corrupt {
+                path: path.display().to_string(),
+                detail: format!("format tag {magic:#x}"),
+            });
+        }
+        Ok(cp)
+    }
+
+    /// `Err` with what differs when this checkpoint was not taken on
+    /// `model` (with `n_dofs` global DOFs).
+    pub(crate) fn check_matches(&self, model: &Model, n_dofs: usize) -> Result<(), String> {
+        if self.n_nodes != model.nodes.len()
+            || self.n_tets != model.tets.len()
+            || self.n_interfaces != model.interfaces.len()
+            || self.u.len() != n_dofs
+            || self.states.bulk.len() != model.tets.len()
+            || self.states.interface.len() != INTERFACE_POINTS * model.interfaces.len()
+        {
+            return Err(format!(
+                "checkpoint has {} nodes, {} tets, {} interface elements; model has {}, {}, {}",
+                self.n_nodes,
+                self.n_tets,
+                self.n_interfaces,
+                model.nodes.len(),
+                model.tets.len(),
+                model.interfaces.len()
+            ));
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,256 @@
+//! The linear correction of a Newton iteration: the configured linear
+//! solver on the current tangent, with the factor kept across iterations
+//! and steps where it preconditions a Krylov method.
+//!
+//! The consistent tangent of Mazars (while damage grows) and of the FCZM
+//! (sliding, damage growth) is unsymmetric, and during softening its
+//! symmetric part is indefinite. Cholesky and PCG work on the symmetric part
+//! (or the secant matrix when that is indefinite): a quasi-Newton method
+//! with linear convergence. GMRES solves with the exact tangent (quadratic
+//! convergence), preconditioned by a factor kept while GMRES needs few
+//! iterations with it.
+
+use super::report::WallTimes;
+use super::workspace::Workspace;
+use crate::assembly::{States, System};
+use crate::laws::TangentKind;
+use crate::linear::{gmres, pcg, Cholesky, LinearError, SplitMatrix, SymLower};
+use crate::spec::solver::{LinearSolverKind, Precision, SolverSettings};
+use std::time::Instant;
+
+/// Linear-algebra state reused across iterations and steps.
+pub(crate) struct LinearState {
+    /// Factor of the current matrix (Cholesky mode) or of an older one
+    /// (PCG, GMRES: the preconditioner).
+    pub(crate) chol: Cholesky,
+    pub(crate) factorisations: usize,
+    pub(crate) pcg_iterations: usize,
+    pub(crate) krylov_iterations: usize,
+    /// Lower values of the matrix held in `chol` when it is kept across
+    /// iterations (PCG, GMRES preconditioner); saved in checkpoints.
+    pub(crate) preconditioner: Vec<f64>,
+    /// The preconditioner is missing or has become poor: factorise anew.
+    pub(crate) refactor: bool,
+}
+
+impl LinearState {
+    /// The symbolic analysis of `system`'s pattern (timed into `wall`).
+    pub(crate) fn new(
+        system: &System,
+        settings: &SolverSettings,
+        wall: &mut WallTimes,
+    ) -> Result<Self, LinearError> {
+        let dofs = system.dofs();
+        let mut dof_node = vec![0usize; dofs.n_free()];
+        for d in 0..dofs.n_total() {
+            if let Some(f) = dofs.free_index(d) {
+                dof_node[f] = d / 3;
+            }
+        }
+        let t = Instant::now();
+        let mut chol = Cholesky::new(
+            &system.col_ptr,
+            &system.row_idx,
+            settings.ordering,
+            &dof_node,
+        )?;
+        if settings.linear_solver == LinearSolverKind::Gmres {
+            chol.set_single_precision_preconditioner(
+                settings.preconditioner_precision == Precision::Single,
+            );
+        }
+        wall.factorisation += t.elapsed().as_secs_f64();
+        Ok(Self {
+            chol,
+            factorisations: 0,
+            pcg_iterations: 0,
+            krylov_iterations: 0,
+            preconditioner: if settings.linear_solver == LinearSolverKind::Cholesky {
+                Vec::new()
+            } else {
+                vec![0.0; system.nnz()]
+            },
+            refactor: true,
+        })
+    }
+}
+
+impl Workspace<'_> {
+    /// Solves for the Newton correction `du` of residual `r` at iterate `u`
+    /// (from `start`) with the configured linear solver; `eta` is the
+    /// Krylov relative tolerance.
+    pub(crate) fn correction(
+        &mut self,
+        start: &States,
+        u: &[f64],
+        r: &[f64],
+        du: &mut [f64],
+        eta: f64,
+    ) -> Result<(), LinearError> {
+        if self.settings.linear_solver == LinearSolverKind::Gmres {
+            return self.newton_krylov(start, u, r, du, eta);
+        }
+        if !self.upper.is_empty() {
+            // Unsymmetric consistent tangent: keep its symmetric part.
+            for (v, w) in self.lower.iter_mut().zip(&self.upper) {
+                *v = 0.5 * (*v + w);
+            }
+        }
+        if self.settings.linear_solver == LinearSolverKind::Pcg && self.lin.chol.is_factored() {
+            let t = Instant::now();
+            let mat = SymLower {
+                col_ptr: &self.system.col_ptr,
+                row_idx: &self.system.row_idx,
+                values: &self.lower,
+            };
+            let res = pcg(
+                mat,
+                &self.lin.chol,
+                r,
+                du,
+                self.settings.pcg_tolerance,
+                self.settings.pcg_max_iterations,
+            );
+            self.wall.solve += t.elapsed().as_secs_f64();
+            if let Ok(info) = res {
+                self.lin.pcg_iterations += info.iterations;
+                return Ok(());
+            }
+        }
+        let mut values = std::mem::take(&mut self.lower);
+        let res = if self.settings.tangent == TangentKind::Consistent {
+            self.factorize_spd(start, u, &mut values)
+        } else {
+            self.factorize(&values)
+        };
+        self.lower = values;
+        res?;
+        if self.settings.linear_solver == LinearSolverKind::Pcg {
+            // The factor preconditions later steps: keep what it was built from.
+            self.lin.preconditioner.copy_from_slice(&self.lower);
+        }
+        self.factor_solve(r, du)
+    }
+
+    fn factorize(&mut self, values: &[f64]) -> Result<(), LinearError> {
+        let t = Instant::now();
+        let res = self.lin.chol.factorize(values);
+        self.wall.factorisation += t.elapsed().as_secs_f64();
+        self.lin.factorisations += 1;
+        res
+    }
+
+    /// du = (kept factor)⁻¹ r.
+    fn factor_solve(&mut self, r: &[f64], du: &mut [f64]) -> Result<(), LinearError> {
+        let t = Instant::now();
+        du.copy_from_slice(r);
+        let out = self.lin.chol.solve_in_place(du);
+        self.wall.solve += t.elapsed().as_secs_f64();
+        out
+    }
+
+    /// Factorises `values` (lower triangle); if that matrix is not positive
+    /// definite, evaluates the secant matrix at the same iterate into
+    /// `values` and factorises that (same internal forces and trial states).
+    fn factorize_spd(
+        &mut self,
+        start: &States,
+        u: &[f64],
+        values: &mut [f64],
+    ) -> Result<(), LinearError> {
+        let mut res = self.factorize(values);
+        if matches!(res, Err(LinearError::NotPositiveDefinite { .. })) {
+            let e = self
+                .system
+                .evaluate(
+                    self.laws,
+                    u,
+                    start,
+                    &mut self.trial,
+                    TangentKind::Secant,
+                    &mut self.f_int,
+                    Some(values),
+                )
+                .map_err(|_| LinearError::NonFinite)?;
+            self.wall.add_eval(&e);
+            res = self.factorize(values);
+        }
+        res
+    }
+
+    /// GMRES on the full tangent, preconditioned by the kept factor;
+    /// refactorises (symmetric part, else secant) when there is none, when
+    /// the last solve needed more than half of `krylov_max_iterations`, or
+    /// when GMRES fails with the old factor. If GMRES fails even with a
+    /// fresh factor, the correction of the factorised matrix itself is used
+    /// (a quasi-Newton step; the line search and the iteration limit guard
+    /// it).
+    fn newton_krylov(
+        &mut self,
+        start: &States,
+        u: &[f64],
+        r: &[f64],
+        du: &mut [f64],
+        eta: f64,
+    ) -> Result<(), LinearError> {
+        let lower = std::mem::take(&mut self.lower);
+        let upper = std::mem::take(&mut self.upper);
+        let out = self.newton_krylov_with((&lower, &upper), start, u, r, du, eta);
+        self.lower = lower;
+        self.upper = upper;
+        out
+    }
+
+    fn newton_krylov_with(
+        &mut self,
+        (lower, upper): (&[f64], &[f64]),
+        start: &States,
+        u: &[f64],
+        r: &[f64],
+        du: &mut [f64],
+        eta: f64,
+    ) -> Result<(), LinearError> {
+        let system = self.system;
+        let a = SplitMatrix {
+            col_ptr: &system.col_ptr,
+            row_idx: &system.row_idx,
+            lower,
+            // A symmetric tangent kind has no separate upper values.
+            upper: if upper.is_empty() { lower } else { upper },
+        };
+        if self.lin.chol.is_factored() && !self.lin.refactor && self.try_gmres(a, r, du, eta) {
+            return Ok(());
+        }
+        let mut pvals = std::mem::take(&mut self.lin.preconditioner);
+        a.symmetric_part(&mut pvals);
+        let res = self.factorize_spd(start, u, &mut pvals);
+        self.lin.preconditioner = pvals;
+        res?;
+        self.lin.refactor = false;
+        if self.try_gmres(a, r, du, eta) {
+            return Ok(());
+        }
+        self.lin.refactor = true;
+        self.factor_solve(r, du)
+    }
+
+    /// One GMRES solve with the kept factor; whether it converged.
+    fn try_gmres(&mut self, a: SplitMatrix<'_>, r: &[f64], du: &mut [f64], eta: f64) -> bool {
+        let max = self.settings.krylov_max_iterations;
+        let t = Instant::now();
+        let res = gmres(a, &self.lin.chol, r, du, eta, max);
+        self.wall.solve += t.elapsed().as_secs_f64();
+        match res {
+            Ok(info) => {
+                self.lin.krylov_iterations += info.iterations;
+                self.lin.refactor = info.iterations > max / 2;
+                true
+            }
+            Err(LinearError::KrylovNotConverged { iterations, .. }) => {
+                self.lin.krylov_iterations += iterations;
+                false
+            }
+            Err(_) => false,
+        }
+    }
+}

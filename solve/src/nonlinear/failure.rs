@@ -1,0 +1,143 @@
+//! Why a Newton attempt failed (the step is cut back) and why a run ended
+//! early (the converged part is kept).
+
+use super::report::RunResult;
+use crate::assembly::{AssemblyError, States};
+use crate::linear::LinearError;
+
+/// How many integration points changed regime between the committed state
+/// and the last iterate of a failed attempt: the hint of a likely cause.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+pub struct RegimeChanges {
+    /// Interface node pairs whose damage grew.
+    pub interface_damage: usize,
+    /// Interface node pairs whose frictional slip changed.
+    pub slip: usize,
+    /// Concrete tets whose damage grew.
+    pub concrete_damage: usize,
+    /// Steel tets whose plastic strain changed.
+    pub steel_yield: usize,
+}
+
+impl RegimeChanges {
+    /// Counts the changes from `committed` to `trial`.
+    pub fn between(committed: &States, trial: &States) -> Self {
+        fn count<T>(a: &[T], b: &[T], changed: impl Fn(&T, &T) -> bool) -> usize {
+            a.iter().zip(b).filter(|(c, t)| changed(c, t)).count()
+        }
+        let grew = |a: f64, b: f64| b > a + 1e-12;
+        Self {
+            interface_damage: count(&committed.interface, &trial.interface, |c, t| {
+                grew(c.damage, t.damage)
+            }),
+            slip: count(&committed.interface, &trial.interface, |c, t| {
+                c.slip != t.slip
+            }),
+            concrete_damage: count(&committed.bulk, &trial.bulk, |c, t| {
+                grew(c.damage, t.damage)
+            }),
+            steel_yield: count(&committed.bulk, &trial.bulk, |c, t| {
+                c.plastic_strain != t.plastic_strain
+            }),
+        }
+    }
+}
+
+impl std::fmt::Display for RegimeChanges {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "in the last iterate, interface damage grew at {} node pairs and frictional slip changed at {}; \
+             concrete damage grew in {} tets; steel yielded in {} tets (softening or sticking/sliding switches)",
+            self.interface_damage, self.slip, self.concrete_damage, self.steel_yield
+        )
+    }
+}
+
+/// Why a Newton attempt failed.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum StepFailure {
+    /// A law or element could not evaluate an iterate.
+    #[error("constitutive failure{}: {source}", if *.in_line_search { " in line search" } else { "" })]
+    Constitutive {
+        in_line_search: bool,
+        source: AssemblyError,
+    },
+    #[error("non-finite residual")]
+    NonFiniteResidual,
+    #[error("non-finite correction")]
+    NonFiniteCorrection,
+    /// The residual stopped decreasing (points switching between law
+    /// branches) with the best iterate above the acceptance.
+    #[error("stagnating at relative residual {relative_residual:e}. {regimes}")]
+    Stagnating {
+        relative_residual: f64,
+        regimes: RegimeChanges,
+    },
+    /// The residual grew beyond 1e8 times its start.
+    #[error("diverging: residual {residual:e} N. {regimes}")]
+    Diverging {
+        /// ‖r‖, N.
+        residual: f64,
+        regimes: RegimeChanges,
+    },
+    #[error("linear solve: {source}. {regimes}")]
+    LinearSolve {
+        source: LinearError,
+        regimes: RegimeChanges,
+    },
+    #[error("no convergence in {iterations} iterations (last relative residual {relative_residual:e}). {regimes}")]
+    IterationLimit {
+        iterations: usize,
+        relative_residual: f64,
+        regimes: RegimeChanges,
+    },
+}
+
+impl StepFailure {
+    /// The regime changes of the last iterate, where the failure records them.
+    pub fn regimes(&self) -> Option<&RegimeChanges> {
+        match self {
+            StepFailure::Stagnating { regimes, .. }
+            | StepFailure::Diverging { regimes, .. }
+            | StepFailure::LinearSolve { regimes, .. }
+            | StepFailure::IterationLimit { regimes, .. } => Some(regimes),
+            _ => None,
+        }
+    }
+}
+
+/// Why a run stopped early.
+#[derive(Debug, thiserror::Error)]
+pub enum SolveError {
+    #[error("model: {0}")]
+    Model(String),
+    #[error(transparent)]
+    Assembly(#[from] AssemblyError),
+    #[error("linear solver set-up: {0}")]
+    Linear(#[from] LinearError),
+    #[error("checkpoint does not match the model: {0}")]
+    Checkpoint(String),
+    #[error(
+        "step {step} did not converge at the minimum step size: imposed displacement {u_imposed:e} m \
+         (step {step_size:e} m); residual history {residual_history:?}; likely cause: {cause}; \
+         {} converged steps kept", partial.rows.len()
+    )]
+    Stalled {
+        step: usize,
+        u_imposed: f64,
+        step_size: f64,
+        residual_history: Vec<f64>,
+        cause: Box<StepFailure>,
+        partial: Box<RunResult>,
+    },
+    #[error(
+        "loading.max_steps = {max_steps} converged steps reached at imposed displacement \
+         {u_imposed:e} m before the end of the loading"
+    )]
+    StepLimit {
+        max_steps: usize,
+        u_imposed: f64,
+        partial: Box<RunResult>,
+    },
+}

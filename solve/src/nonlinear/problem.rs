@@ -1,0 +1,71 @@
+//! What the driver is given: proportional Dirichlet conditions and the
+//! measurement recorded per converged step.
+
+/// Proportional Dirichlet conditions: u[dofs[i]] = base[i] + λ·rate[i].
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Dirichlet {
+    /// Global DOFs (3·node + component).
+    pub dofs: Vec<usize>,
+    /// Value at λ = 0, m.
+    pub base: Vec<f64>,
+    /// Value per unit λ (dimensionless: λ is a length, m).
+    pub rate: Vec<f64>,
+}
+
+impl Dirichlet {
+    /// Adds DOF `dof` with value `base + λ·rate`.
+    pub fn push(&mut self, dof: usize, base: f64, rate: f64) {
+        self.dofs.push(dof);
+        self.base.push(base);
+        self.rate.push(rate);
+    }
+    pub(crate) fn apply(&self, lambda: f64, u: &mut [f64]) {
+        for i in 0..self.dofs.len() {
+            u[self.dofs[i]] = self.base[i] + lambda * self.rate[i];
+        }
+    }
+}
+
+/// What is recorded per converged step.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Measurement {
+    /// Force = Σ f_int over these global DOFs, N.
+    pub force_dofs: Vec<usize>,
+    /// Relative displacement = mean u over `plus` − mean u over `minus`, m.
+    pub plus_dofs: Vec<usize>,
+    pub minus_dofs: Vec<usize>,
+    /// Stress = force · this factor (1/m²), e.g. 1/(π d l_adh) (applied
+    /// after `force_factor`).
+    pub stress_per_force: f64,
+    /// Whole-specimen force per force summed on the model (1, or 4 for a
+    /// quarter model: `Symmetry::force_factor`), dimensionless.
+    pub force_factor: f64,
+}
+
+impl Default for Measurement {
+    fn default() -> Self {
+        Self {
+            force_dofs: Vec::new(),
+            plus_dofs: Vec::new(),
+            minus_dofs: Vec::new(),
+            stress_per_force: 0.0,
+            force_factor: 1.0,
+        }
+    }
+}
+
+impl Measurement {
+    /// (force N, relative displacement m, stress Pa) of a state.
+    pub(crate) fn eval(&self, u: &[f64], f_int: &[f64]) -> (f64, f64, f64) {
+        let force: f64 = self.force_factor * self.force_dofs.iter().map(|&d| f_int[d]).sum::<f64>();
+        let mean = |ds: &[usize]| {
+            if ds.is_empty() {
+                0.0
+            } else {
+                ds.iter().map(|&d| u[d]).sum::<f64>() / ds.len() as f64
+            }
+        };
+        let rel = mean(&self.plus_dofs) - mean(&self.minus_dofs);
+        (force, rel, force * self.stress_per_force)
+    }
+}

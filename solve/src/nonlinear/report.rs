@@ -1,0 +1,147 @@
+//! What a run reports: the curve rows, the summary, wall times, and the
+//! per-step events an [`Observer`] receives.
+
+use super::checkpoint::Checkpoint;
+use super::failure::StepFailure;
+use crate::assembly::{ElementLaws, EvalTimings, States};
+use mesh::Model;
+use serde::{Deserialize, Serialize};
+
+/// One row of `curve.csv` (SI).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct CurveRow {
+    pub step: usize,
+    /// Imposed displacement λ, m.
+    pub u_imposed: f64,
+    /// Reaction F, N.
+    pub force: f64,
+    /// Free-end displacement (relative displacement), m.
+    pub fed: f64,
+    /// Mean bond stress σ_mb, Pa.
+    pub bond_stress: f64,
+    /// Newton iterations of the converged attempt.
+    pub iterations: usize,
+}
+
+/// Wall times by phase, s.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct WallTimes {
+    pub total: f64,
+    /// Scatter into the global matrix and force vector.
+    pub assembly: f64,
+    /// Constitutive updates and element kernels.
+    pub constitutive: f64,
+    /// Numeric Cholesky factorisations (and the symbolic analysis).
+    pub factorisation: f64,
+    /// Triangular solves and conjugate gradients.
+    pub solve: f64,
+}
+
+impl WallTimes {
+    pub(crate) fn add(&mut self, o: &WallTimes) {
+        self.total += o.total;
+        self.assembly += o.assembly;
+        self.constitutive += o.constitutive;
+        self.factorisation += o.factorisation;
+        self.solve += o.solve;
+    }
+    pub(crate) fn add_eval(&mut self, e: &EvalTimings) {
+        self.assembly += e.assembly;
+        self.constitutive += e.constitutive;
+    }
+}
+
+/// Summary of a run (`summary.json`).
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+pub struct Summary {
+    /// Largest σ_mb, Pa.
+    pub peak_bond_stress: f64,
+    /// FED at the peak, m.
+    pub fed_at_peak: f64,
+    /// FED at the last converged step, m.
+    pub final_fed: f64,
+    pub steps: usize,
+    pub cutbacks: usize,
+    /// Free DOFs.
+    pub dofs: usize,
+    pub total_iterations: usize,
+    pub factorisations: usize,
+    pub pcg_iterations: usize,
+    /// GMRES iterations of the Newton–Krylov solver.
+    #[serde(default)]
+    pub krylov_iterations: usize,
+    /// Steps accepted on the force criterion alone: Newton stagnated with
+    /// the residual already below `residual_tolerance` (points switching
+    /// between loading and unloading, or stick and slip, kept the energy
+    /// criterion out of reach).
+    #[serde(default)]
+    pub force_only_steps: usize,
+    /// IMPL-EX: the largest relative residual of a converged step's
+    /// displacement under the implicit damage (see
+    /// `SolverSettings::impl_ex_tolerance`); 0 for implicit integration.
+    #[serde(default)]
+    pub impl_ex_max_residual: f64,
+    pub wall_time_s: WallTimes,
+}
+
+/// A finished (or partial) run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RunResult {
+    pub rows: Vec<CurveRow>,
+    pub summary: Summary,
+    /// The last converged state (for fields and restarts).
+    pub last: Checkpoint,
+}
+
+/// Per converged step, for progress output.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StepReport {
+    pub row: CurveRow,
+    /// Step size of the converged attempt, m.
+    pub step_size: f64,
+    /// Wall times of this step (all attempts).
+    pub times: WallTimes,
+    /// Relative residual ‖r‖/F_scale at each iterate of the converged
+    /// attempt (the predictor first).
+    pub residual_history: Vec<f64>,
+    /// The attempt ended on its best iterate of a stagnating iteration
+    /// (counted in `Summary::force_only_steps`).
+    pub force_only: bool,
+    /// IMPL-EX: relative residual of the converged displacement under the
+    /// implicit damage (the extrapolation error of the step); `None` for
+    /// implicit integration.
+    pub impl_ex_residual: Option<f64>,
+}
+
+/// A failed attempt that led to a smaller step.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Cutback {
+    /// Step number being attempted.
+    pub step: usize,
+    /// Imposed displacement of the failed attempt, m.
+    pub u_imposed: f64,
+    pub failed_step_size: f64,
+    pub next_step_size: f64,
+    pub reason: StepFailure,
+    /// ‖r‖/‖reaction‖ per iteration.
+    pub residual_history: Vec<f64>,
+}
+
+/// The converged state offered to observers.
+pub struct CommittedView<'a> {
+    pub model: &'a Model,
+    pub laws: &'a ElementLaws,
+    pub checkpoint: &'a dyn Fn() -> Checkpoint,
+    pub u: &'a [f64],
+    pub states: &'a States,
+}
+
+/// Receives progress; every method has a no-op default.
+pub trait Observer {
+    fn step_converged(&mut self, _report: &StepReport, _state: &CommittedView<'_>) {}
+    fn cutback(&mut self, _event: &Cutback) {}
+}
+
+/// An observer that ignores everything.
+pub struct Silent;
+impl Observer for Silent {}

@@ -1,0 +1,165 @@
+//! The pull-out test of SPEC §2: boundary conditions and measurements
+//! from the model's node sets, for the nonlinear driver
+//! ([`crate::nonlinear::run`]) and the linear benchmark alike:
+//! * concrete bearing face (z = L): u_z = 0 on every node;
+//! * lateral rigid-body modes of the concrete: of the bearing-face nodes
+//!   nearest the line y = 0, the two extreme in x get u_y = 0; of those
+//!   nearest x = 0, the one with the largest y gets u_x = 0 (removes x, y
+//!   translation and rotation about z without opposing a mirror-symmetric
+//!   deformation; the three other modes are held by u_z = 0 on the face);
+//! * quarter models (`Symmetry::Quarter`): u_x = 0 on `symmetry_x`, u_y = 0
+//!   on `symmetry_y` instead of the point constraints; forces × 4;
+//! * bar loaded end: u_z = λ (the imposed displacement), u_x = u_y = 0 (the
+//!   machine's grip; it also holds the bar's lateral modes once the
+//!   interface has lost its shear stiffness);
+//! * F = Σ of the internal forces f_z over the loaded-end nodes (the pull,
+//!   N); FED = mean u_z of `bar_free_end` − mean u_z of `concrete_free_face`
+//!   (the whole z = 0 concrete face as the mesh gives it, m);
+//!   σ_mb = F / (π d l_adh) (paper eq. 14, Pa).
+
+use crate::assembly::ElementLaws;
+use crate::nonlinear::{run, Checkpoint, Dirichlet, Measurement, Observer, RunResult, SolveError};
+use crate::spec::solver::{Loading, SolverSettings};
+use mesh::{Model, Symmetry};
+
+/// Boundary conditions and measurement of the pull-out test (see module doc).
+pub fn pullout_conditions(model: &Model) -> Result<(Dirichlet, Measurement), SolveError> {
+    let sets = &model.node_sets;
+    let need = |name: &str, v: &Vec<u32>| {
+        if v.is_empty() {
+            Err(SolveError::Model(format!("node set {name} is empty")))
+        } else if v.iter().any(|&n| n as usize >= model.nodes.len()) {
+            Err(SolveError::Model(format!(
+                "node set {name} references a missing node"
+            )))
+        } else {
+            Ok(())
+        }
+    };
+    need("bar_loaded_end", &sets.bar_loaded_end)?;
+    need("bar_free_end", &sets.bar_free_end)?;
+    need("concrete_bearing_face", &sets.concrete_bearing_face)?;
+    need("concrete_free_face", &sets.concrete_free_face)?;
+    if !(model.bar_diameter > 0.0 && model.adhesive_length > 0.0) {
+        return Err(SolveError::Model(format!(
+            "bar_diameter {} m and adhesive_length {} m must be > 0",
+            model.bar_diameter, model.adhesive_length
+        )));
+    }
+    let mut dir = Dirichlet::default();
+    let mut seen = vec![false; 3 * model.nodes.len()];
+    let mut fix = |dir: &mut Dirichlet, dof: usize, rate: f64| {
+        if !seen[dof] {
+            seen[dof] = true;
+            dir.push(dof, 0.0, rate);
+        }
+    };
+    for &n in &sets.bar_loaded_end {
+        let n = n as usize;
+        fix(&mut dir, 3 * n, 0.0);
+        fix(&mut dir, 3 * n + 1, 0.0);
+        fix(&mut dir, 3 * n + 2, 1.0);
+    }
+    for &n in &sets.concrete_bearing_face {
+        fix(&mut dir, 3 * n as usize + 2, 0.0);
+    }
+    if model.symmetry == Symmetry::Quarter {
+        // The mirror planes hold the normal displacement; with the bearing
+        // face's u_z = 0 they remove every rigid mode, so no point
+        // constraints are added (they would over-constrain the quarter).
+        need("symmetry_x", &sets.symmetry_x)?;
+        need("symmetry_y", &sets.symmetry_y)?;
+        for &n in &sets.symmetry_x {
+            fix(&mut dir, 3 * n as usize, 0.0);
+        }
+        for &n in &sets.symmetry_y {
+            fix(&mut dir, 3 * n as usize + 1, 0.0);
+        }
+        return Ok((dir, measurement(model)));
+    }
+    // Lateral rigid modes: points on (or nearest to) the mirror lines of
+    // the bearing face, where a symmetric deformation has no displacement
+    // across the line. Corner points (the earlier choice) pin the Poisson
+    // expansion of the face and changed the elastic force by 0.45 % on a
+    // mirrored test specimen.
+    let x = |n: &u32| model.nodes[*n as usize];
+    let face = &sets.concrete_bearing_face;
+    let nearest = |c: usize| {
+        let d = face
+            .iter()
+            .map(|n| x(n)[c].abs())
+            .fold(f64::INFINITY, f64::min);
+        let span = face
+            .iter()
+            .map(|n| x(n)[1 - c].abs())
+            .fold(0.0f64, f64::max);
+        let line: Vec<u32> = face
+            .iter()
+            .copied()
+            .filter(|n| x(n)[c].abs() <= d + 1e-9 * span)
+            .collect();
+        let lo = line
+            .iter()
+            .copied()
+            .min_by(|p, q| x(p)[1 - c].total_cmp(&x(q)[1 - c]))
+            .expect("checked non-empty");
+        let hi = line
+            .iter()
+            .copied()
+            .max_by(|p, q| x(p)[1 - c].total_cmp(&x(q)[1 - c]))
+            .expect("checked non-empty");
+        (lo, hi)
+    };
+    // Nearest the line y = 0: two points at both ends hold u_y (y
+    // translation and rotation about z); nearest x = 0: one holds u_x.
+    let (a, b) = nearest(1);
+    let (_, c) = nearest(0);
+    if x(&b)[0] - x(&a)[0] <= 0.0 {
+        return Err(SolveError::Model(
+            "concrete_bearing_face has no extent in x: cannot remove the rotation about z".into(),
+        ));
+    }
+    fix(&mut dir, 3 * a as usize + 1, 0.0);
+    fix(&mut dir, 3 * b as usize + 1, 0.0);
+    fix(&mut dir, 3 * c as usize, 0.0);
+    Ok((dir, measurement(model)))
+}
+
+/// Force on the loaded end (times the symmetry factor), FED and σ_mb.
+fn measurement(model: &Model) -> Measurement {
+    let sets = &model.node_sets;
+    Measurement {
+        force_dofs: sets
+            .bar_loaded_end
+            .iter()
+            .map(|&n| 3 * n as usize + 2)
+            .collect(),
+        plus_dofs: sets
+            .bar_free_end
+            .iter()
+            .map(|&n| 3 * n as usize + 2)
+            .collect(),
+        minus_dofs: sets
+            .concrete_free_face
+            .iter()
+            .map(|&n| 3 * n as usize + 2)
+            .collect(),
+        stress_per_force: 1.0 / (std::f64::consts::PI * model.bar_diameter * model.adhesive_length),
+        force_factor: model.symmetry.force_factor(),
+    }
+}
+
+/// Runs the pull-out test of SPEC §2 (see [`run`]).
+pub fn solve_pullout(
+    model: &Model,
+    laws: &ElementLaws,
+    loading: &Loading,
+    settings: &SolverSettings,
+    checkpoint: Option<Checkpoint>,
+    observer: &mut dyn Observer,
+) -> Result<RunResult, SolveError> {
+    let (dir, meas) = pullout_conditions(model)?;
+    run(
+        model, laws, &dir, &meas, loading, settings, checkpoint, observer,
+    )
+}
