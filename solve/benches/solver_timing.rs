@@ -7,7 +7,7 @@
 //! sets n (default 30, ≈ 89 k DOFs).
 
 use mesh::{Model, Region};
-use solve::assembly::{ElementLaws, SharedBulkLaw, States, System};
+use solve::assembly::{ElementLaws, Outputs, SharedBulkLaw, States, System, Tangents};
 use solve::laws::elastic::LinearElastic;
 use solve::laws::TangentKind;
 use solve::linear::{pcg, Cholesky, Ordering, SymLower};
@@ -83,7 +83,7 @@ fn main() {
         interfaces: vec![],
     };
     let t = Instant::now();
-    let sys = System::new(&m, &fixed, &[]).unwrap();
+    let sys = System::new(&m, &fixed, &[], &[]).unwrap();
     println!(
         "tets {}  free DOFs {}  lower nnz {}",
         m.tets.len(),
@@ -112,9 +112,8 @@ fn main() {
                 &u,
                 &st,
                 &mut trial,
-                TangentKind::Consistent,
-                &mut f,
-                Some(&mut k),
+                Tangents::all(TangentKind::Consistent),
+                Outputs::with_matrix(&mut f, &mut k),
             )
             .unwrap();
         cons += e.constitutive;

@@ -233,6 +233,78 @@ pub struct System {
     iface_active: Vec<usize>,
     /// Per active element, per node pair, lower entries of its 6×6 block.
     iface_map: Vec<[[u32; PAIR_LOWER]; INTERFACE_POINTS]>,
+    /// Element matrix entries coupling a free DOF to a DOF that moves with
+    /// the load factor, sorted by tet (for the load column).
+    tet_load: Vec<LoadCoupling>,
+    /// The same for the node pairs of the active interface elements
+    /// (`element` is the index among the active ones).
+    pair_load: Vec<LoadCoupling>,
+}
+
+/// K_ab · rate_b enters the load column at row `free` (the free index of a).
+#[derive(Debug, Clone, Copy)]
+struct LoadCoupling {
+    element: u32,
+    /// Node pair of an interface element (0 for tets).
+    point: u8,
+    row: u8,
+    col: u8,
+    free: u32,
+    rate: f64,
+}
+
+/// The tangent kind of each element family.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Tangents {
+    pub bulk: TangentKind,
+    pub interface: TangentKind,
+}
+
+impl Tangents {
+    /// The same kind for tets and interface elements.
+    pub fn all(kind: TangentKind) -> Self {
+        Self {
+            bulk: kind,
+            interface: kind,
+        }
+    }
+}
+
+/// What an evaluation writes (every array is overwritten, not added to).
+pub struct Outputs<'a> {
+    /// Internal forces, global (length 3·nodes), N.
+    pub f_int: &'a mut [f64],
+    /// Lower-triangle tangent values (N/m): K_ij for i ≥ j in the
+    /// system's pattern. An unsymmetric tangent's transposed entries go to
+    /// `upper`, if given, else they are dropped.
+    pub lower: Option<&'a mut [f64]>,
+    /// In the same pattern, the transposed entries: `upper[k]` = K_ji where
+    /// `lower[k]` = K_ij (i ≥ j). Together they hold the whole (possibly
+    /// unsymmetric) consistent tangent.
+    pub upper: Option<&'a mut [f64]>,
+    /// ∂f_int/∂λ on the free DOFs (N/m; length n_free): the coupling of the
+    /// free DOFs to the constrained ones that move with the load factor λ
+    /// at their rates (see [`System::new`]). Needs `lower`.
+    pub load_column: Option<&'a mut [f64]>,
+}
+
+impl<'a> Outputs<'a> {
+    /// Internal forces only.
+    pub fn forces(f_int: &'a mut [f64]) -> Self {
+        Self {
+            f_int,
+            lower: None,
+            upper: None,
+            load_column: None,
+        }
+    }
+    /// Internal forces and the lower-triangle tangent values.
+    pub fn with_matrix(f_int: &'a mut [f64], lower: &'a mut [f64]) -> Self {
+        Self {
+            lower: Some(lower),
+            ..Self::forces(f_int)
+        }
+    }
 }
 
 /// Block size of the parallel constitutive pass (elements).
@@ -250,11 +322,15 @@ fn pair_dofs(nodes: &[u32; 6], p: usize) -> [usize; 6] {
 }
 
 impl System {
-    /// Builds geometry, pattern and scatter maps. `constrained` as in [`DofMap::new`];
-    /// `active_interfaces[i]` tells whether interface element `i` is assembled.
+    /// Builds geometry, pattern and scatter maps. `constrained` as in
+    /// [`DofMap::new`]; `load_rates`: the constrained DOFs that move with
+    /// the load factor λ and their rates du/dλ (for the load column of
+    /// [`Outputs`]); `active_interfaces[i]` tells whether interface element
+    /// `i` is assembled.
     pub fn new(
         model: &Model,
         constrained: &[usize],
+        load_rates: &[(usize, f64)],
         active_interfaces: &[bool],
     ) -> Result<Self, AssemblyError> {
         let n_nodes = model.nodes.len();
@@ -394,7 +470,54 @@ impl System {
                 })
             })
             .collect();
+        let mut rate = vec![0.0; 3 * n_nodes];
+        for &(d, r) in load_rates {
+            if d >= rate.len() || dofs.free_index(d).is_some() {
+                return Err(AssemblyError::Model(format!(
+                    "load rate on DOF {d}, which is not a constrained DOF of the model"
+                )));
+            }
+            rate[d] = r;
+        }
+        let couplings = |element: usize, point: usize, d: &[usize]| {
+            let mut out = Vec::new();
+            for (b, &db) in d.iter().enumerate() {
+                if rate[db] == 0.0 {
+                    continue;
+                }
+                for (a, &da) in d.iter().enumerate() {
+                    if let Some(free) = dofs.free_index(da) {
+                        out.push(LoadCoupling {
+                            element: element as u32,
+                            point: point as u8,
+                            row: a as u8,
+                            col: b as u8,
+                            free: free as u32,
+                            rate: rate[db],
+                        });
+                    }
+                }
+            }
+            out
+        };
+        let tet_load = model
+            .tets
+            .iter()
+            .enumerate()
+            .flat_map(|(i, t)| couplings(i, 0, &tet_dofs(t)))
+            .collect();
+        let pair_load = iface_active
+            .iter()
+            .enumerate()
+            .flat_map(|(slot, &i)| {
+                (0..INTERFACE_POINTS)
+                    .flat_map(|p| couplings(slot, p, &pair_dofs(&model.interfaces[i].nodes, p)))
+                    .collect::<Vec<_>>()
+            })
+            .collect();
         Ok(Self {
+            tet_load,
+            pair_load,
             dofs,
             col_ptr,
             row_idx,
@@ -421,68 +544,34 @@ impl System {
     }
 
     /// Constitutive update at every integration point for the global
-    /// displacement `u` (m, length 3·nodes) from the `committed` states:
-    /// writes the trial states, the internal force `f_int` (N, global) and,
-    /// when `matrix` is given, the lower-triangle tangent values (N/m) of the
-    /// tangent `kind` (K_ij for i ≥ j: an unsymmetric tangent's upper
-    /// triangle is dropped; see [`System::evaluate_full`]).
-    #[allow(clippy::too_many_arguments)]
+    /// displacement `u` (m, length 3·nodes) from the `start` states: writes
+    /// the trial states and what `out` asks for (see [`Outputs`]) with the
+    /// tangent kinds `tangents`.
     pub fn evaluate(
         &self,
         laws: &ElementLaws,
         u: &[f64],
-        committed: &States,
+        start: &States,
         trial: &mut States,
-        kind: TangentKind,
-        f_int: &mut [f64],
-        matrix: Option<&mut [f64]>,
+        tangents: Tangents,
+        out: Outputs<'_>,
     ) -> Result<EvalTimings, AssemblyError> {
-        self.evaluate_full(laws, u, committed, trial, kind, f_int, matrix, None)
-    }
-
-    /// As [`System::evaluate`], and when `upper` is given it receives, in the
-    /// same lower-triangle pattern, the transposed entries: `upper[k]` =
-    /// K_ji where `lower[k]` = K_ij (i ≥ j). Together they hold the whole
-    /// (possibly unsymmetric) consistent tangent.
-    #[allow(clippy::too_many_arguments)]
-    pub fn evaluate_full(
-        &self,
-        laws: &ElementLaws,
-        u: &[f64],
-        committed: &States,
-        trial: &mut States,
-        kind: TangentKind,
-        f_int: &mut [f64],
-        matrix: Option<&mut [f64]>,
-        upper: Option<&mut [f64]>,
-    ) -> Result<EvalTimings, AssemblyError> {
-        self.evaluate_kinds(
-            laws,
-            u,
-            committed,
-            trial,
-            [kind, kind],
+        let committed = start;
+        let Outputs {
             f_int,
-            matrix,
-            upper,
-        )
-    }
-
-    /// As [`System::evaluate_full`] with one tangent kind for the tets
-    /// (`kinds[0]`) and one for the interface elements (`kinds[1]`).
-    #[allow(clippy::too_many_arguments)]
-    pub fn evaluate_kinds(
-        &self,
-        laws: &ElementLaws,
-        u: &[f64],
-        committed: &States,
-        trial: &mut States,
-        kinds: [TangentKind; 2],
-        f_int: &mut [f64],
-        mut matrix: Option<&mut [f64]>,
-        mut upper: Option<&mut [f64]>,
-    ) -> Result<EvalTimings, AssemblyError> {
-        let [bulk_kind, iface_kind] = kinds;
+            lower: mut matrix,
+            mut upper,
+            mut load_column,
+        } = out;
+        if load_column.is_some() && matrix.is_none() {
+            return Err(AssemblyError::Model(
+                "the load column needs the element matrices: ask for the matrix too".into(),
+            ));
+        }
+        if let Some(c) = load_column.as_deref_mut() {
+            c.iter_mut().for_each(|v| *v = 0.0);
+        }
+        let (bulk_kind, iface_kind) = (tangents.bulk, tangents.interface);
         let mut timings = EvalTimings::default();
         f_int.iter_mut().for_each(|v| *v = 0.0);
         if let Some(m) = matrix.as_deref_mut() {
@@ -554,6 +643,18 @@ impl System {
             }
             timings.constitutive += t0.elapsed().as_secs_f64();
             let t1 = Instant::now();
+            if let Some(col) = load_column.as_deref_mut() {
+                let first = self
+                    .tet_load
+                    .partition_point(|e| (e.element as usize) < start);
+                for e in self.tet_load[first..]
+                    .iter()
+                    .take_while(|e| (e.element as usize) < end)
+                {
+                    let k = &kbuf[e.element as usize - start];
+                    col[e.free as usize] += k[12 * e.row as usize + e.col as usize] * e.rate;
+                }
+            }
             for off in 0..len {
                 let index = start + off;
                 let d = tet_dofs(&self.tets[index]);
@@ -637,6 +738,12 @@ impl System {
             .collect::<Result<_, AssemblyError>>()?;
         timings.constitutive += t0.elapsed().as_secs_f64();
         let t1 = Instant::now();
+        if let Some(col) = load_column {
+            for e in &self.pair_load {
+                let kp = &results[e.element as usize].2 .1[e.point as usize];
+                col[e.free as usize] += kp[6 * e.row as usize + e.col as usize] * e.rate;
+            }
+        }
         for (slot, (index, st, (f, kpair))) in results.into_iter().enumerate() {
             trial.interface[INTERFACE_POINTS * index..INTERFACE_POINTS * (index + 1)]
                 .copy_from_slice(&st);

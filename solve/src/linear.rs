@@ -388,7 +388,7 @@ pub fn pcg(
 
 /// A general (possibly unsymmetric) square matrix in the symmetric pattern
 /// of [`SymLower`]: `lower[k]` = A_ij and `upper[k]` = A_ji for the stored
-/// position k = (i, j), i ≥ j (see `System::evaluate_full`).
+/// position k = (i, j), i ≥ j (see `assembly::Outputs::upper`).
 #[derive(Debug, Clone, Copy)]
 pub struct SplitMatrix<'a> {
     pub col_ptr: &'a [usize],

@@ -3,7 +3,9 @@
 
 use mesh::{Frame, InterfaceElement, InterfaceZone, Model, Region};
 use nalgebra::Vector3;
-use solve::assembly::{ElementLaws, SharedBulkLaw, SharedInterfaceLaw, States, System};
+use solve::assembly::{
+    ElementLaws, Outputs, SharedBulkLaw, SharedInterfaceLaw, States, System, Tangents,
+};
 use solve::laws::elastic::{ElasticInterface, LinearElastic};
 use solve::laws::fczm::{Fczm, DEFAULT_GAMMA};
 use solve::laws::tvergaard::Tvergaard;
@@ -280,7 +282,7 @@ fn patch_test_uniform_strain_on_perturbed_mesh() {
             );
         }
     }
-    let sys = System::new(&m, &dir.dofs, &[]).unwrap();
+    let sys = System::new(&m, &dir.dofs, &[], &[]).unwrap();
     for (t, g) in m.tets.iter().zip(sys.tet_geometry()) {
         let ue: [f64; 12] = std::array::from_fn(|i| u[3 * t[i / 3] as usize + i % 3]);
         let s = g.strain(&ue);
@@ -309,7 +311,7 @@ fn assembled_tangent_matches_finite_differences() {
         tv.clone(),
         Some(tv),
     );
-    let sys = System::new(&m, &[], &vec![true; m.interfaces.len()]).unwrap();
+    let sys = System::new(&m, &[], &[], &vec![true; m.interfaces.len()]).unwrap();
     let n = 3 * m.nodes.len();
     // A displacement with the steel side sliding and opening past λ_0.
     let mut u = vec![0.0; n];
@@ -328,9 +330,8 @@ fn assembled_tangent_matches_finite_differences() {
         &u,
         &committed,
         &mut trial,
-        TangentKind::Consistent,
-        &mut f0,
-        Some(&mut k),
+        Tangents::all(TangentKind::Consistent),
+        Outputs::with_matrix(&mut f0, &mut k),
     )
     .unwrap();
     let damaged = trial.interface.iter().filter(|s| s.damage > 0.0).count();
@@ -349,9 +350,8 @@ fn assembled_tangent_matches_finite_differences() {
             &up,
             &committed,
             &mut trial,
-            TangentKind::Consistent,
-            &mut fp,
-            None,
+            Tangents::all(TangentKind::Consistent),
+            Outputs::forces(&mut fp),
         )
         .unwrap();
         sys.evaluate(
@@ -359,9 +359,8 @@ fn assembled_tangent_matches_finite_differences() {
             &um,
             &committed,
             &mut trial,
-            TangentKind::Consistent,
-            &mut fm,
-            None,
+            Tangents::all(TangentKind::Consistent),
+            Outputs::forces(&mut fm),
         )
         .unwrap();
         for i in j..n {
@@ -378,6 +377,106 @@ fn assembled_tangent_matches_finite_differences() {
         worst < 1e-5 * kmax,
         "max |K − FD| = {worst:e}, max |K| = {kmax:e}"
     );
+}
+
+/// The load column ∂f_int/∂λ on the free DOFs equals the central finite
+/// difference of the free internal forces in λ, with the Dirichlet values
+/// moving at their rates through tets and through sliding, damaging FCZM
+/// interface elements (the border of the path-following system, SPEC §6).
+#[test]
+fn load_column_matches_finite_differences() {
+    let m = slab_pullout(4);
+    let laws = pullout_laws(&m);
+    let mut dir = Dirichlet::default();
+    for &n in &m.node_sets.bar_loaded_end {
+        dir.push(3 * n as usize + 2, 0.0, 1.0);
+    }
+    for &n in &m.node_sets.concrete_bearing_face {
+        dir.push(3 * n as usize + 2, 0.0, 0.0);
+    }
+    // Concrete interface nodes at z = 0 move across the interface with λ:
+    // the column then also couples through the interface elements.
+    let bottom: Vec<usize> = (0..m.nodes.len())
+        .filter(|&n| {
+            m.node_region[n] == Region::Concrete
+                && m.nodes[n][2].abs() < 1e-12
+                && (m.nodes[n][0] - 4e-3).abs() < 1e-12
+        })
+        .collect();
+    assert!(!bottom.is_empty());
+    for &n in &bottom {
+        dir.push(3 * n, 0.0, -0.3);
+    }
+    let active: Vec<bool> = laws.interfaces.iter().map(|l| l.is_some()).collect();
+    let sys = System::new(&m, &dir.dofs, &dir.load_rates(), &active).unwrap();
+    let n = 3 * m.nodes.len();
+    let mut u = vec![0.0; n];
+    for (i, r) in m.node_region.iter().enumerate() {
+        if *r == Region::Steel {
+            u[3 * i + 2] = 6e-5 + 1e-6 * (i % 3) as f64;
+            u[3 * i] = -2e-6 * (i % 2) as f64;
+        }
+    }
+    let set = |u: &mut Vec<f64>, lambda: f64| {
+        for ((&d, &b), &r) in dir.dofs.iter().zip(&dir.base).zip(&dir.rate) {
+            u[d] = b + lambda * r;
+        }
+    };
+    let lambda = 8e-5;
+    set(&mut u, lambda);
+    let committed = States::initial(&m);
+    let mut trial = committed.clone();
+    let mut f0 = vec![0.0; n];
+    let mut k = vec![0.0; sys.nnz()];
+    let mut column = vec![0.0; sys.dofs().n_free()];
+    sys.evaluate(
+        &laws,
+        &u,
+        &committed,
+        &mut trial,
+        Tangents::all(TangentKind::Consistent),
+        Outputs {
+            f_int: &mut f0,
+            lower: Some(&mut k),
+            upper: None,
+            load_column: Some(&mut column),
+        },
+    )
+    .unwrap();
+    assert!(trial
+        .interface
+        .iter()
+        .any(|s| s.damage > 0.0 && s.slip != [0.0; 2]));
+    let h = 1e-11;
+    let f_at = |lam: f64| {
+        let mut v = u.clone();
+        set(&mut v, lam);
+        let mut f = vec![0.0; n];
+        let mut t = committed.clone();
+        sys.evaluate(
+            &laws,
+            &v,
+            &committed,
+            &mut t,
+            Tangents::all(TangentKind::Consistent),
+            Outputs::forces(&mut f),
+        )
+        .unwrap();
+        let mut free = vec![0.0; sys.dofs().n_free()];
+        sys.dofs().gather(&f, &mut free);
+        free
+    };
+    let (fp, fm) = (f_at(lambda + h), f_at(lambda - h));
+    let scale = column.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+    assert!(scale > 0.0);
+    for i in 0..column.len() {
+        let fd = (fp[i] - fm[i]) / (2.0 * h);
+        assert!(
+            (fd - column[i]).abs() < 1e-5 * scale,
+            "row {i}: column {:e}, finite difference {fd:e}",
+            column[i]
+        );
+    }
 }
 
 /// Two 1 mm steel blocks joined by one 1 mm × 1 mm interface (paper Fig. 8)

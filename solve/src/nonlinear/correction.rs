@@ -12,7 +12,7 @@
 
 use super::report::WallTimes;
 use super::workspace::Workspace;
-use crate::assembly::{States, System};
+use crate::assembly::{Outputs, States, System, Tangents};
 use crate::laws::TangentKind;
 use crate::linear::{gmres, pcg, Cholesky, LinearError, SplitMatrix, SymLower};
 use crate::spec::solver::{LinearSolverKind, Precision, SolverSettings};
@@ -167,9 +167,8 @@ impl Workspace<'_> {
                     u,
                     start,
                     &mut self.trial,
-                    TangentKind::Secant,
-                    &mut self.f_int,
-                    Some(values),
+                    Tangents::all(TangentKind::Secant),
+                    Outputs::with_matrix(&mut self.f_int, values),
                 )
                 .map_err(|_| LinearError::NonFinite)?;
             self.wall.add_eval(&e);

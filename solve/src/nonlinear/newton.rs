@@ -13,7 +13,7 @@
 
 use super::failure::{RegimeChanges, StepFailure};
 use super::workspace::Workspace;
-use crate::assembly::States;
+use crate::assembly::{States, Tangents};
 use crate::laws::TangentKind;
 use crate::linear::{dot, norm};
 use crate::spec::solver::{Forcing, SolverSettings};
@@ -82,7 +82,7 @@ impl Workspace<'_> {
         // Tangent kinds of the tets and of the interface elements: a stagnating
         // consistent-tangent Newton continues with the secant matrix (see
         // below), from iteration `window`.
-        let mut kinds = [settings.tangent; 2];
+        let mut kinds = Tangents::all(settings.tangent);
         let mut window = 0;
         // The iterate with the smallest relative residual (a stagnating
         // attempt may end on it, see below).
@@ -151,12 +151,12 @@ impl Workspace<'_> {
                     }
                     return Attempt::converged(k, history, true);
                 }
-                if stagnating && kinds != [TangentKind::Secant; 2] {
+                if stagnating && kinds != Tangents::all(TangentKind::Secant) {
                     // Points switching between branches (damage growing or not,
                     // stick or slip) make the consistent tangent jump from one
                     // iterate to the next; the secant matrix does not
                     // (docs/solver.md, Stagnation).
-                    kinds = [TangentKind::Secant; 2];
+                    kinds = Tangents::all(TangentKind::Secant);
                     window = k;
                 } else if stagnating {
                     return Attempt::failed(
@@ -219,7 +219,7 @@ impl Workspace<'_> {
         &mut self,
         start: &States,
         u: &mut [f64],
-        kinds: [TangentKind; 2],
+        kinds: Tangents,
         d: &[f64],
         g0: f64,
         r_prev: f64,

@@ -19,6 +19,15 @@ impl Dirichlet {
         self.base.push(base);
         self.rate.push(rate);
     }
+    /// The DOFs that move with λ and their rates.
+    pub fn load_rates(&self) -> Vec<(usize, f64)> {
+        self.dofs
+            .iter()
+            .zip(&self.rate)
+            .filter(|(_, r)| **r != 0.0)
+            .map(|(d, r)| (*d, *r))
+            .collect()
+    }
     pub(crate) fn apply(&self, lambda: f64, u: &mut [f64]) {
         for i in 0..self.dofs.len() {
             u[self.dofs[i]] = self.base[i] + lambda * self.rate[i];

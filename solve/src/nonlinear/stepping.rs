@@ -11,7 +11,7 @@ use super::report::{
     CommittedView, CurveRow, Cutback, Observer, RunResult, StepReport, Summary, WallTimes,
 };
 use super::workspace::{reaction_norm, residual, Workspace};
-use crate::assembly::{AssemblyError, ElementLaws, States, System};
+use crate::assembly::{AssemblyError, ElementLaws, Outputs, States, System, Tangents};
 use crate::laws::TangentKind;
 use crate::linear::norm;
 use crate::spec::solver::{
@@ -62,7 +62,7 @@ pub fn run(
     }
     let active: Vec<bool> = laws.interfaces.iter().map(|l| l.is_some()).collect();
     let mut wall = WallTimes::default();
-    let system = System::new(model, &dirichlet.dofs, &active)?;
+    let system = System::new(model, &dirichlet.dofs, &dirichlet.load_rates(), &active)?;
     let n_total = system.dofs().n_total();
     let n_free = system.dofs().n_free();
     let lin = LinearState::new(&system, settings, &mut wall)?;
@@ -375,7 +375,14 @@ fn implicit_residual(
     for s in &mut scratch.bulk {
         s.explicit_damage = Some(s.damage);
     }
-    system.evaluate(laws, u, scratch, trial, TangentKind::Secant, f_int, None)?;
+    system.evaluate(
+        laws,
+        u,
+        scratch,
+        trial,
+        Tangents::all(TangentKind::Secant),
+        Outputs::forces(f_int),
+    )?;
     let mut r = vec![0.0; system.dofs().n_free()];
     residual(system.dofs(), f_int, &mut r);
     let reaction = reaction_norm(system, f_int);

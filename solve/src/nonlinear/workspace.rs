@@ -4,8 +4,7 @@
 
 use super::correction::LinearState;
 use super::report::WallTimes;
-use crate::assembly::{AssemblyError, DofMap, ElementLaws, States, System};
-use crate::laws::TangentKind;
+use crate::assembly::{AssemblyError, DofMap, ElementLaws, Outputs, States, System, Tangents};
 use crate::spec::solver::SolverSettings;
 
 pub(crate) struct Workspace<'a> {
@@ -19,7 +18,7 @@ pub(crate) struct Workspace<'a> {
     /// Lower-triangle tangent values of the current iterate, N/m.
     pub(crate) lower: Vec<f64>,
     /// Transposed entries of the consistent tangent (see
-    /// `System::evaluate_full`); empty for symmetric tangent kinds.
+    /// `assembly::Outputs::upper`); empty for symmetric tangent kinds.
     pub(crate) upper: Vec<f64>,
     pub(crate) lin: LinearState,
     /// Wall times of the step being attempted.
@@ -27,25 +26,27 @@ pub(crate) struct Workspace<'a> {
 }
 
 impl Workspace<'_> {
-    /// Evaluates the iterate `u` from `start` with tangent `kinds` (tets,
-    /// interfaces) into `trial`, `f_int` and the tangent values.
+    /// Evaluates the iterate `u` from `start` with the tangent kinds
+    /// `tangents` into `trial`, `f_int` and the tangent values.
     pub(crate) fn evaluate(
         &mut self,
         start: &States,
         u: &[f64],
-        kinds: [TangentKind; 2],
+        tangents: Tangents,
     ) -> Result<(), AssemblyError> {
         let upper = (!self.upper.is_empty()).then_some(self.upper.as_mut_slice());
-        let system = self.system;
-        let t = system.evaluate_kinds(
+        let t = self.system.evaluate(
             self.laws,
             u,
             start,
             &mut self.trial,
-            kinds,
-            &mut self.f_int,
-            Some(&mut self.lower),
-            upper,
+            tangents,
+            Outputs {
+                f_int: &mut self.f_int,
+                lower: Some(&mut self.lower),
+                upper,
+                load_column: None,
+            },
         )?;
         self.wall.add_eval(&t);
         Ok(())
