@@ -39,6 +39,9 @@ pub struct RunRecord {
     pub completed: bool,
     /// Why the run did not complete (stopped solve or failed stage).
     pub reason: Option<String>,
+    /// How a completed run ended: `completed` (the end of the loading),
+    /// `limit_load` or `unloaded` (solve.json `ending.kind`).
+    pub ending: Option<String>,
     pub dofs: Option<u64>,
     pub steps: Option<u64>,
     pub iterations: Option<u64>,
@@ -93,6 +96,10 @@ impl RunRecord {
                 .unwrap_or(false),
             reason: solve
                 .get("stopped")
+                .and_then(Value::as_str)
+                .map(str::to_string),
+            ending: solve
+                .pointer("/ending/kind")
                 .and_then(Value::as_str)
                 .map(str::to_string),
             dofs: u(&solve, "/summary/dofs"),
@@ -688,6 +695,13 @@ pub fn stress_report(
     }
     let n = cases.len();
     let completed = cases.iter().filter(|c| c.record.completed).count();
+    let ended = |kind: &str| {
+        cases
+            .iter()
+            .filter(|c| c.record.completed && c.record.ending.as_deref() == Some(kind))
+            .count()
+    };
+    let (limit_loads, unloaded) = (ended("limit_load"), ended("unloaded"));
     let panics = cases.iter().filter(|c| c.panicked).count();
     let nans = cases.iter().filter(|c| c.non_finite).count();
     let unexplained = cases.iter().filter(|c| !c.explained()).count();
@@ -700,7 +714,9 @@ pub fn stress_report(
         md,
         "# Numerical-stability stress sweep\n\n\
          Command: `{command}`\n\n\
-         Study `{}` ({}): {n} cases; {completed} completed, {} stopped with a reason, \
+         Study `{}` ({}): {n} cases; {completed} completed ({limit_loads} of them at the \
+         bar's limit load, {unloaded} unloaded: split through or pulled free; \
+         docs/solver.md, \"How a run ends\"), {} stopped with a reason, \
          {panics} panics, {nans} with a non-finite value in curve.csv, {unexplained} unexplained, \
          {energy_fail} failing the energy check (tolerance {} of W_ext on the converged steps).\n\n\
          Energy imbalance: max over the converged steps of |W_ext − W_int|/W_ext; dissipation \
@@ -710,8 +726,8 @@ pub fn stress_report(
         n - completed,
         solve::energy::ENERGY_TOLERANCE,
     );
-    let _ = writeln!(md, "| case | parameters | completed | steps | final u (mm) | peak σ_mb (MPa) | energy imbalance | energy check | NaN/inf | panic | reason if stopped |");
-    let _ = writeln!(md, "|---|---|---|---:|---:|---:|---:|---|---|---|---|");
+    let _ = writeln!(md, "| case | parameters | completed | ending | steps | final u (mm) | peak σ_mb (MPa) | energy imbalance | energy check | NaN/inf | panic | reason if stopped |");
+    let _ = writeln!(md, "|---|---|---|---|---:|---:|---:|---:|---|---|---|---|");
     for c in &cases {
         let r = &c.record;
         let reason = r
@@ -721,10 +737,15 @@ pub fn stress_report(
             .unwrap_or_default();
         let _ = writeln!(
             md,
-            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
             c.name,
             c.parameters,
             if r.completed { "yes" } else { "no" },
+            if r.completed {
+                r.ending.as_deref().unwrap_or("–")
+            } else {
+                "–"
+            },
             r.steps.map_or("–".into(), |d| d.to_string()),
             fmt_opt(r.curve.last().map(|x| x.u_imposed), 1e3, 4),
             fmt_opt(r.peak, 1e-6, 3),

@@ -535,9 +535,33 @@ pub fn run(ctx: &Ctx, mesh_dir: &Path, out: &Path) -> Result<()> {
         &out.join("curve.csv"),
         &curve_csv(&result.rows, energy_rows.as_deref()),
     )?;
+    match result.ending {
+        solve::nonlinear::Ending::Completed => {}
+        solve::nonlinear::Ending::LimitLoad { force, yield_force } => {
+            ctx.printer.line(&format!(
+                "solve: ended at a limit load: the bar yields over its section at F = {:.1} N \
+                 ({:.0} % of σ_y A = {:.1} N); the bond sees no more load",
+                force,
+                100.0 * force / yield_force,
+                yield_force
+            ));
+        }
+        solve::nonlinear::Ending::Unloaded {
+            force,
+            peak_force,
+            broken_concrete_tets,
+        } => {
+            ctx.printer.line(&format!(
+                "solve: ended unloaded: F = {force:.3e} N after a peak of {peak_force:.1} N \
+                 (the cube split through or the bar pulled free; {broken_concrete_tets} \
+                 concrete tets with D > 0.99)"
+            ));
+        }
+    }
     let solve_json = serde_json::json!({
         "summary": result.summary,
         "completed": stopped.is_none(),
+        "ending": result.ending,
         "stopped": stopped,
         "cutbacks": observer.cutbacks,
         "energy_check": energy_check,

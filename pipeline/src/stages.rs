@@ -14,7 +14,7 @@ use std::time::Instant;
 /// the same inputs changes, so old artifacts are not reused.
 const GEOMETRY_FORMAT: u32 = 1;
 const MESH_FORMAT: u32 = 2;
-const SOLVE_FORMAT: u32 = 8;
+const SOLVE_FORMAT: u32 = 9;
 const POST_FORMAT: u32 = 2;
 
 pub const STAGES: [&str; 4] = ["geometry", "mesh", "solve", "post"];

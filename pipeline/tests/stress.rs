@@ -104,48 +104,39 @@ fn extreme_parameters_never_panic_or_mislead() {
     std::fs::remove_dir_all(&work).unwrap();
 }
 
-/// The small ribbed specimen up to 40 µm (through the adhesion peak): one to
-/// three tets at the Mazars loading/unloading threshold hold Newton in a
-/// two-cycle there. With the default `solver.stagnation_acceptance` (2) the
-/// run reaches the end by ending such a step on its best iterate (counted
-/// in `force_only_steps`) and its energy balance holds; with the strict
-/// criterion (1) the same step is cut down to the minimum size and the run
-/// stops with a reason, its converged steps kept.
+/// The small ribbed specimen up to 60 µm (past the adhesion peak): a
+/// few sliver tets at the Mazars loading/unloading threshold hold Newton in
+/// a two-cycle there. With the strict criterion
+/// (`solver.stagnation_acceptance: 1`) the stagnating attempt's flipping
+/// tets take their damage from the extrapolation of their history and the
+/// step is retried at the same size: the run reaches its end on the stated
+/// criteria (no step ends on a best iterate) and its energy balance holds.
 #[test]
-fn threshold_two_cycles_end_on_the_best_iterate() {
+fn threshold_two_cycles_are_settled_by_an_explicit_retry() {
     let work = std::env::temp_dir().join(format!("ribbar-cycle-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&work);
-    let run = |acceptance: &str| {
-        run_tiny_ribbed(
-            &work.join(acceptance),
-            &[
-                "--set",
-                "loading.u_final=40um",
-                "--set",
-                &format!("solver.stagnation_acceptance={acceptance}"),
-            ],
-        )
-    };
-    let (out, solve) = run("2");
+    let (out, solve) = run_tiny_ribbed(
+        &work,
+        &[
+            "--set",
+            "loading.u_final=60um",
+            "--set",
+            "solver.stagnation_acceptance=1",
+        ],
+    );
     assert!(
         out.status.success(),
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
     assert_eq!(solve["completed"], true);
+    let summary = &solve["summary"];
+    assert_eq!(summary["force_only_steps"], 0, "{solve}");
     assert!(
-        solve["summary"]["force_only_steps"].as_u64().unwrap() >= 1,
+        summary["explicit_retries"].as_u64().unwrap() >= 1,
         "{solve}"
     );
     assert_eq!(solve["energy_check"]["passed"], true);
-    let (out, strict) = run("1");
-    assert!(!out.status.success());
-    assert_eq!(strict["completed"], false);
-    assert!(strict["stopped"]
-        .as_str()
-        .unwrap()
-        .contains("did not converge"));
-    assert!(strict["summary"]["steps"].as_u64().unwrap() >= 1);
     std::fs::remove_dir_all(&work).unwrap();
 }
 
@@ -175,7 +166,7 @@ fn impl_ex_concrete_runs_through_the_threshold_two_cycles() {
     assert_eq!(full["completed"], true);
     assert_eq!(full["summary"]["force_only_steps"], 0, "{full}");
     assert_eq!(full["energy_check"]["passed"], true, "{full}");
-    let to_peak = ["--set", "loading.u_final=40um"];
+    let to_peak = ["--set", "loading.u_final=60um"];
     let (_, implicit, implicit_curve) = run("implicit", &to_peak);
     let (_, implex, implex_curve) = run(
         "implex",

@@ -9,7 +9,8 @@
 //! `key=value` overrides a `solver` key (e.g. `linear_solver=cholesky`,
 //! `tangent=secant`) or, as `loading.key=value`, a `loading` key;
 //! `bench.save_at=N bench.checkpoint=PATH` saves the state after step N
-//! there, `bench.checkpoint=PATH` alone resumes from it. Prints
+//! there, `bench.checkpoint=PATH` alone resumes from it, `bench.resume=PATH`
+//! resumes from PATH in either case. Prints
 //! every converged step, every cut-back, and the summary with the phase
 //! times.
 
@@ -140,6 +141,9 @@ fn main() {
         (Some(n), Some(p)) => print.save = Some((n.parse().expect("bench.save_at"), p.into())),
         (None, Some(p)) => resume = Some(Checkpoint::load(p.as_ref()).expect("checkpoint")),
         _ => {}
+    }
+    if let Some(p) = opt("resume") {
+        resume = Some(Checkpoint::load(p.as_ref()).expect("bench.resume"));
     }
     let res = solve_pullout(&model, &laws, &loading, &settings, resume, &mut print);
     let summary = match &res {

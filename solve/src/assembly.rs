@@ -241,7 +241,11 @@ pub struct System {
     pair_load: Vec<LoadCoupling>,
 }
 
-/// K_ab · rate_b enters the load column at row `free` (the free index of a).
+/// An element matrix entry K_ab that couples the load factor λ to the
+/// system: `weight` · K_ab enters the load column at the free index of a
+/// (b moves with λ, weight = rate_b), the load row at the free index of b
+/// (a moves with λ, weight = rate_a), or the load diagonal (both move,
+/// weight = rate_a rate_b; `free` unused).
 #[derive(Debug, Clone, Copy)]
 struct LoadCoupling {
     element: u32,
@@ -249,8 +253,52 @@ struct LoadCoupling {
     point: u8,
     row: u8,
     col: u8,
+    kind: CouplingKind,
     free: u32,
-    rate: f64,
+    weight: f64,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum CouplingKind {
+    Column,
+    Row,
+    Diagonal,
+}
+
+/// Derivatives with respect to the load factor λ, for path-following: F is
+/// the generalised load Σ_a rate_a f_int,a over the DOFs that move with λ.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct LoadDerivatives {
+    /// ∂f_int/∂λ on the free DOFs, N/m.
+    pub column: Vec<f64>,
+    /// ∂F/∂u on the free DOFs, N/m.
+    pub row: Vec<f64>,
+    /// ∂F/∂λ, N/m.
+    pub diagonal: f64,
+}
+
+impl LoadDerivatives {
+    /// Zeroed derivatives for `n_free` free DOFs.
+    pub fn new(n_free: usize) -> Self {
+        Self {
+            column: vec![0.0; n_free],
+            row: vec![0.0; n_free],
+            diagonal: 0.0,
+        }
+    }
+    fn clear(&mut self) {
+        self.column.iter_mut().for_each(|v| *v = 0.0);
+        self.row.iter_mut().for_each(|v| *v = 0.0);
+        self.diagonal = 0.0;
+    }
+    fn add(&mut self, e: &LoadCoupling, k: f64) {
+        let v = e.weight * k;
+        match e.kind {
+            CouplingKind::Column => self.column[e.free as usize] += v,
+            CouplingKind::Row => self.row[e.free as usize] += v,
+            CouplingKind::Diagonal => self.diagonal += v,
+        }
+    }
 }
 
 /// The tangent kind of each element family.
@@ -282,10 +330,10 @@ pub struct Outputs<'a> {
     /// `lower[k]` = K_ij (i ≥ j). Together they hold the whole (possibly
     /// unsymmetric) consistent tangent.
     pub upper: Option<&'a mut [f64]>,
-    /// ∂f_int/∂λ on the free DOFs (N/m; length n_free): the coupling of the
-    /// free DOFs to the constrained ones that move with the load factor λ
-    /// at their rates (see [`System::new`]). Needs `lower`.
-    pub load_column: Option<&'a mut [f64]>,
+    /// The derivatives in the load factor λ: the coupling of the free DOFs
+    /// to the constrained ones that move with λ at their rates (see
+    /// [`System::new`]). Needs `lower`.
+    pub load: Option<&'a mut LoadDerivatives>,
 }
 
 impl<'a> Outputs<'a> {
@@ -295,7 +343,7 @@ impl<'a> Outputs<'a> {
             f_int,
             lower: None,
             upper: None,
-            load_column: None,
+            load: None,
         }
     }
     /// Internal forces and the lower-triangle tangent values.
@@ -481,21 +529,25 @@ impl System {
         }
         let couplings = |element: usize, point: usize, d: &[usize]| {
             let mut out = Vec::new();
-            for (b, &db) in d.iter().enumerate() {
-                if rate[db] == 0.0 {
-                    continue;
-                }
-                for (a, &da) in d.iter().enumerate() {
-                    if let Some(free) = dofs.free_index(da) {
-                        out.push(LoadCoupling {
-                            element: element as u32,
-                            point: point as u8,
-                            row: a as u8,
-                            col: b as u8,
-                            free: free as u32,
-                            rate: rate[db],
-                        });
-                    }
+            for (a, &da) in d.iter().enumerate() {
+                for (b, &db) in d.iter().enumerate() {
+                    let (kind, free, weight) = match (dofs.free_index(da), dofs.free_index(db)) {
+                        (Some(fa), None) if rate[db] != 0.0 => (CouplingKind::Column, fa, rate[db]),
+                        (None, Some(fb)) if rate[da] != 0.0 => (CouplingKind::Row, fb, rate[da]),
+                        (None, None) if rate[da] != 0.0 && rate[db] != 0.0 => {
+                            (CouplingKind::Diagonal, 0, rate[da] * rate[db])
+                        }
+                        _ => continue,
+                    };
+                    out.push(LoadCoupling {
+                        element: element as u32,
+                        point: point as u8,
+                        row: a as u8,
+                        col: b as u8,
+                        kind,
+                        free: free as u32,
+                        weight,
+                    });
                 }
             }
             out
@@ -561,15 +613,15 @@ impl System {
             f_int,
             lower: mut matrix,
             mut upper,
-            mut load_column,
+            mut load,
         } = out;
-        if load_column.is_some() && matrix.is_none() {
+        if load.is_some() && matrix.is_none() {
             return Err(AssemblyError::Model(
-                "the load column needs the element matrices: ask for the matrix too".into(),
+                "the load derivatives need the element matrices: ask for the matrix too".into(),
             ));
         }
-        if let Some(c) = load_column.as_deref_mut() {
-            c.iter_mut().for_each(|v| *v = 0.0);
+        if let Some(l) = load.as_deref_mut() {
+            l.clear();
         }
         let (bulk_kind, iface_kind) = (tangents.bulk, tangents.interface);
         let mut timings = EvalTimings::default();
@@ -643,7 +695,7 @@ impl System {
             }
             timings.constitutive += t0.elapsed().as_secs_f64();
             let t1 = Instant::now();
-            if let Some(col) = load_column.as_deref_mut() {
+            if let Some(l) = load.as_deref_mut() {
                 let first = self
                     .tet_load
                     .partition_point(|e| (e.element as usize) < start);
@@ -652,7 +704,7 @@ impl System {
                     .take_while(|e| (e.element as usize) < end)
                 {
                     let k = &kbuf[e.element as usize - start];
-                    col[e.free as usize] += k[12 * e.row as usize + e.col as usize] * e.rate;
+                    l.add(e, k[12 * e.row as usize + e.col as usize]);
                 }
             }
             for off in 0..len {
@@ -738,10 +790,10 @@ impl System {
             .collect::<Result<_, AssemblyError>>()?;
         timings.constitutive += t0.elapsed().as_secs_f64();
         let t1 = Instant::now();
-        if let Some(col) = load_column {
+        if let Some(l) = load {
             for e in &self.pair_load {
                 let kp = &results[e.element as usize].2 .1[e.point as usize];
-                col[e.free as usize] += kp[6 * e.row as usize + e.col as usize] * e.rate;
+                l.add(e, kp[6 * e.row as usize + e.col as usize]);
             }
         }
         for (slot, (index, st, (f, kpair))) in results.into_iter().enumerate() {

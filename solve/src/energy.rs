@@ -526,6 +526,7 @@ mod tests {
             zeta: 4.0,
             gamma: DEFAULT_GAMMA,
             min_damage: 0.0,
+            contact_smoothing: 0.0,
         }
     }
 

@@ -429,15 +429,41 @@ impl SplitMatrix<'_> {
     }
 }
 
+/// A linear operator y = A x on vectors of length `n`.
+pub trait Operator {
+    fn n(&self) -> usize;
+    fn mul(&self, x: &[f64], y: &mut [f64]);
+}
+
+/// An approximate inverse applied in place, z = M⁻¹ r.
+pub trait Preconditioner {
+    fn apply(&self, r: &mut [f64]) -> Result<(), LinearError>;
+}
+
+impl Operator for SplitMatrix<'_> {
+    fn n(&self) -> usize {
+        SplitMatrix::n(self)
+    }
+    fn mul(&self, x: &[f64], y: &mut [f64]) {
+        SplitMatrix::mul(self, x, y)
+    }
+}
+
+impl Preconditioner for Cholesky {
+    fn apply(&self, r: &mut [f64]) -> Result<(), LinearError> {
+        self.precondition(r)
+    }
+}
+
 /// Flexible GMRES (Saad 1993) for A x = b from x = 0, right-preconditioned
-/// by the Cholesky factor `m` of an SPD matrix close to A (A M⁻¹ y = b),
+/// by `m`, e.g. the Cholesky factor of an SPD matrix close to A (A M⁻¹ y = b),
 /// without restart: stops at ‖b − A x‖ ≤ `tolerance`·‖b‖ or fails after
 /// `max_iterations` (storage: 2 `max_iterations` + 1 vectors). Right
 /// preconditioning makes the monitored residual the true one, so the Newton
 /// correction's accuracy does not depend on the preconditioner's quality.
 pub fn gmres(
-    a: SplitMatrix<'_>,
-    m: &Cholesky,
+    a: &impl Operator,
+    m: &impl Preconditioner,
     b: &[f64],
     x: &mut [f64],
     tolerance: f64,
@@ -472,7 +498,7 @@ pub fn gmres(
     let mut k = 0;
     while k < kmax {
         let mut z = v[k].clone();
-        m.precondition(&mut z)?;
+        m.apply(&mut z)?;
         a.mul(&z, &mut w);
         zs.push(z);
         let mut col = vec![0.0; k + 2];
@@ -652,7 +678,7 @@ mod tests {
             upper: &upper,
         };
         let mut x = vec![0.0; n];
-        let info = gmres(a, &c, &b, &mut x, 1e-10, 60).unwrap();
+        let info = gmres(&a, &c, &b, &mut x, 1e-10, 60).unwrap();
         let mut ax = vec![0.0; n];
         a.mul(&x, &mut ax);
         let res: Vec<f64> = ax.iter().zip(&b).map(|(p, q)| p - q).collect();

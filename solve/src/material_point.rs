@@ -213,6 +213,7 @@ fn interface_from(p: &RawParameters, law: &str) -> RawInterface {
         mu: p.mu.clone(),
         zeta: p.zeta.clone(),
         gamma: p.gamma.clone(),
+        contact_smoothing: None,
         xi: None,
         kn: p.kn.clone(),
         ks: p.ks.clone(),

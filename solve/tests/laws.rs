@@ -26,6 +26,7 @@ fn fczm() -> Fczm {
         zeta: 1.0,
         gamma: -1e6,
         min_damage: 0.0,
+        contact_smoothing: 0.0,
     }
 }
 
@@ -39,6 +40,14 @@ fn fczm_calibrated() -> Fczm {
         friction: 0.3,
         zeta: 8.0,
         ..fczm()
+    }
+}
+
+/// R1's calibrated FCZM with the contact switch smoothed over |u_n| < 1 µm.
+fn fczm_smoothed() -> Fczm {
+    Fczm {
+        contact_smoothing: 1e-6,
+        ..fczm_calibrated()
     }
 }
 
@@ -241,6 +250,12 @@ interface_tangent!(fczm_tangent_compression_band_sliding, "FCZM consistent tange
     fczm(), history: [[-3.3333e-6, 3e-5, 0.0]], at: [-3.3333e-6, 4e-5, 5e-6], regime: sliding_loading_i);
 interface_tangent!(fczm_tangent_compression_sliding_unloading, "FCZM consistent tangent matches finite differences when sliding back without damage growth (eqs. 19–21).",
     fczm(), history: [[-3.3333e-5, 6e-5, 0.0]], at: [-3.3333e-5, 3e-5, 0.0], regime: sliding_unloading_i);
+interface_tangent!(fczm_tangent_smoothed_band_open_loading, "Smoothed FCZM consistent tangent matches finite differences just open inside the contact band while damaging (docs/laws.md, contact smoothing).",
+    fczm_smoothed(), history: [[4e-5, 2e-5, 0.0]], at: [3e-7, 6e-5, 1e-5], regime: loading_i);
+interface_tangent!(fczm_tangent_smoothed_band_closed_sliding, "Smoothed FCZM consistent tangent matches finite differences just closed inside the contact band while sliding (docs/laws.md, contact smoothing).",
+    fczm_smoothed(), history: [[4e-5, 6e-5, 0.0]], at: [-4e-7, 3e-5, -1e-5], regime: sliding_i);
+interface_tangent!(fczm_tangent_smoothed_band_centre, "Smoothed FCZM consistent tangent matches finite differences at u_n = 0 of a damaged interface (docs/laws.md, contact smoothing).",
+    fczm_smoothed(), history: [[4e-5, 2e-5, 0.0]], at: [0.0, 1e-5, 2e-6], regime: unloading_i);
 interface_tangent!(fczm_tangent_pure_compression, "FCZM consistent tangent is K_n in undamaged compression (eqs. 17, 25).",
     fczm(), history: [], at: [-2e-5, 0.0, 0.0], regime: elastic_i);
 
@@ -313,12 +328,46 @@ impl Lcg {
     }
 }
 
+/// The smoothed contact switch changes the FCZM only inside its band
+/// |u_n| < δ, where the normal traction moves by at most K_n δ/4 (the
+/// ramp's offset) times the closed/open stiffness difference and the
+/// damaged part's weight, and the traction stays continuous
+/// (docs/laws.md, contact smoothing).
+#[test]
+fn fczm_contact_smoothing_is_confined_to_its_band() {
+    let sharp = fczm_calibrated();
+    let smooth = fczm_smoothed();
+    let delta = smooth.contact_smoothing;
+    let kn = sharp.normal_stiffness();
+    let st = interface_history(&sharp, &[[4e-5, 2e-5, 0.0]]);
+    let t = |law: &Fczm, un: f64| {
+        law.step(&st, &Vector3::new(un, 1e-5, 0.0), TangentKind::Consistent)
+            .unwrap()
+            .traction
+    };
+    for k in -40..=40 {
+        let un = k as f64 * 0.05 * delta;
+        let diff = (t(&smooth, un) - t(&sharp, un)).amax();
+        if un.abs() >= delta {
+            assert_eq!(diff, 0.0, "u_n = {un:e}");
+        } else {
+            assert!(diff <= 2.0 * kn * delta / 4.0, "u_n = {un:e}: {diff:e}");
+        }
+    }
+    // Continuous across the band edges.
+    for edge in [-delta, delta] {
+        let jump = (t(&smooth, edge * (1.0 + 1e-9)) - t(&smooth, edge * (1.0 - 1e-9))).amax();
+        assert!(jump < 1e-6 * kn * delta, "edge {edge:e}: {jump:e}");
+    }
+}
+
 /// Damage (and λ̃, κ) never decreases along random interface paths (SPEC §5).
 #[test]
 fn interface_damage_never_decreases() {
     let laws = [
         AnyInterfaceLaw::Fczm(fczm()),
         AnyInterfaceLaw::Fczm(fczm_calibrated()),
+        AnyInterfaceLaw::Fczm(fczm_smoothed()),
         AnyInterfaceLaw::Tvergaard(tvergaard()),
         AnyInterfaceLaw::Coulomb(coulomb()),
     ];

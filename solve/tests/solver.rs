@@ -4,19 +4,21 @@
 use mesh::{Frame, InterfaceElement, InterfaceZone, Model, Region};
 use nalgebra::Vector3;
 use solve::assembly::{
-    ElementLaws, Outputs, SharedBulkLaw, SharedInterfaceLaw, States, System, Tangents,
+    ElementLaws, LoadDerivatives, Outputs, SharedBulkLaw, SharedInterfaceLaw, States, System,
+    Tangents,
 };
 use solve::laws::elastic::{ElasticInterface, LinearElastic};
 use solve::laws::fczm::{Fczm, DEFAULT_GAMMA};
+use solve::laws::j2::J2;
 use solve::laws::tvergaard::Tvergaard;
 use solve::laws::{InterfaceLaw, InterfaceState, TangentKind};
 use solve::linear::Ordering;
 use solve::nonlinear::{
-    run, CommittedView, Dirichlet, Measurement, Observer, Silent, SolveError, StepFailure,
-    StepReport,
+    run, CommittedView, Dirichlet, Ending, Measurement, Observer, Problem, Silent, SolveError,
+    StepFailure, StepReport,
 };
 use solve::problems::pullout::solve_pullout;
-use solve::spec::solver::{Forcing, LinearSolverKind, Loading, SolverSettings};
+use solve::spec::solver::{Forcing, LinearSolverKind, Loading, PathFollowing, SolverSettings};
 use std::sync::Arc;
 
 /// A structured block of hexahedra, each split into 6 positive tets.
@@ -198,6 +200,7 @@ fn fczm_table2() -> Fczm {
         zeta: 1.0,
         gamma: DEFAULT_GAMMA,
         min_damage: 0.0,
+        contact_smoothing: 0.0,
     }
 }
 
@@ -262,10 +265,13 @@ fn patch_test_uniform_strain_on_perturbed_mesh() {
         ..Loading::default()
     };
     let res = run(
-        &m,
-        &laws,
-        &dir,
-        &meas,
+        &Problem {
+            model: &m,
+            laws: &laws,
+            dirichlet: &dir,
+            measurement: &meas,
+            yield_force: None,
+        },
         &loading,
         &SolverSettings::default(),
         None,
@@ -379,12 +385,13 @@ fn assembled_tangent_matches_finite_differences() {
     );
 }
 
-/// The load column ∂f_int/∂λ on the free DOFs equals the central finite
-/// difference of the free internal forces in λ, with the Dirichlet values
-/// moving at their rates through tets and through sliding, damaging FCZM
-/// interface elements (the border of the path-following system, SPEC §6).
+/// The load derivatives equal central finite differences: the column
+/// ∂f_int/∂λ on the free DOFs, the row ∂F/∂u of the generalised load
+/// F = Σ rate_a f_int,a and its ∂F/∂λ, with the Dirichlet values moving at
+/// their rates through tets and through sliding, damaging FCZM interface
+/// elements (the border of the path-following system, SPEC §6).
 #[test]
-fn load_column_matches_finite_differences() {
+fn load_derivatives_match_finite_differences() {
     let m = slab_pullout(4);
     let laws = pullout_laws(&m);
     let mut dir = Dirichlet::default();
@@ -428,7 +435,7 @@ fn load_column_matches_finite_differences() {
     let mut trial = committed.clone();
     let mut f0 = vec![0.0; n];
     let mut k = vec![0.0; sys.nnz()];
-    let mut column = vec![0.0; sys.dofs().n_free()];
+    let mut load = LoadDerivatives::new(sys.dofs().n_free());
     sys.evaluate(
         &laws,
         &u,
@@ -439,7 +446,7 @@ fn load_column_matches_finite_differences() {
             f_int: &mut f0,
             lower: Some(&mut k),
             upper: None,
-            load_column: Some(&mut column),
+            load: Some(&mut load),
         },
     )
     .unwrap();
@@ -448,14 +455,13 @@ fn load_column_matches_finite_differences() {
         .iter()
         .any(|s| s.damage > 0.0 && s.slip != [0.0; 2]));
     let h = 1e-11;
-    let f_at = |lam: f64| {
-        let mut v = u.clone();
-        set(&mut v, lam);
+    // Free internal forces and the generalised load of a displacement.
+    let eval = |v: &[f64]| {
         let mut f = vec![0.0; n];
         let mut t = committed.clone();
         sys.evaluate(
             &laws,
-            &v,
+            v,
             &committed,
             &mut t,
             Tangents::all(TangentKind::Consistent),
@@ -464,17 +470,45 @@ fn load_column_matches_finite_differences() {
         .unwrap();
         let mut free = vec![0.0; sys.dofs().n_free()];
         sys.dofs().gather(&f, &mut free);
-        free
+        let load: f64 = dir.load_rates().iter().map(|&(d, r)| r * f[d]).sum();
+        (free, load)
     };
-    let (fp, fm) = (f_at(lambda + h), f_at(lambda - h));
-    let scale = column.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+    let at_lambda = |lam: f64| {
+        let mut v = u.clone();
+        set(&mut v, lam);
+        eval(&v)
+    };
+    let ((fp, lp), (fm, lm)) = (at_lambda(lambda + h), at_lambda(lambda - h));
+    let scale = load.column.iter().fold(0.0f64, |a, v| a.max(v.abs()));
     assert!(scale > 0.0);
-    for i in 0..column.len() {
+    for i in 0..load.column.len() {
         let fd = (fp[i] - fm[i]) / (2.0 * h);
         assert!(
-            (fd - column[i]).abs() < 1e-5 * scale,
-            "row {i}: column {:e}, finite difference {fd:e}",
-            column[i]
+            (fd - load.column[i]).abs() < 1e-5 * scale,
+            "column row {i}: {:e}, finite difference {fd:e}",
+            load.column[i]
+        );
+    }
+    let fd = (lp - lm) / (2.0 * h);
+    assert!(
+        (fd - load.diagonal).abs() < 1e-5 * load.diagonal.abs(),
+        "{fd:e}, {:e}",
+        load.diagonal
+    );
+    let row_scale = load.row.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+    assert!(row_scale > 0.0);
+    for d in 0..n {
+        let Some(i) = sys.dofs().free_index(d) else {
+            continue;
+        };
+        let (mut p, mut m) = (u.clone(), u.clone());
+        p[d] += h;
+        m[d] -= h;
+        let fd = (eval(&p).1 - eval(&m).1) / (2.0 * h);
+        assert!(
+            (fd - load.row[i]).abs() < 1e-5 * row_scale,
+            "row entry {i}: {:e}, finite difference {fd:e}",
+            load.row[i]
         );
     }
 }
@@ -554,10 +588,13 @@ fn fig8_run(law: SharedInterfaceLaw, comp: usize, u_final: f64) -> Vec<(f64, f64
         ..Loading::default()
     };
     let res = run(
-        &m,
-        &laws,
-        &dir,
-        &meas,
+        &Problem {
+            model: &m,
+            laws: &laws,
+            dirichlet: &dir,
+            measurement: &meas,
+            yield_force: None,
+        },
         &loading,
         &SolverSettings::default(),
         None,
@@ -631,6 +668,7 @@ fn pullout_laws(m: &Model) -> ElementLaws {
         zeta: 8.0,
         gamma: DEFAULT_GAMMA,
         min_damage: 0.0,
+        contact_smoothing: 0.0,
     };
     ElementLaws::by_region(
         m,
@@ -700,6 +738,18 @@ fn resume_equals_uninterrupted() {
 /// Runs uninterrupted, and again from a saved checkpoint of step 4; the
 /// curves must agree bit for bit (the kept preconditioner is restored).
 fn resume_case(m: &Model, laws: &ElementLaws, loading: &Loading, settings: &SolverSettings) {
+    resume_at(4, m, laws, loading, settings);
+}
+
+/// Resumes from the checkpoint of step `at` and compares every row with
+/// the uninterrupted run's, bit for bit.
+fn resume_at(
+    at: usize,
+    m: &Model,
+    laws: &ElementLaws,
+    loading: &Loading,
+    settings: &SolverSettings,
+) {
     struct Grab(usize, Option<solve::nonlinear::Checkpoint>);
     impl Observer for Grab {
         fn step_converged(&mut self, r: &StepReport, v: &CommittedView<'_>) {
@@ -708,9 +758,9 @@ fn resume_case(m: &Model, laws: &ElementLaws, loading: &Loading, settings: &Solv
             }
         }
     }
-    let mut grab = Grab(4, None);
+    let mut grab = Grab(at, None);
     let full = solve_pullout(m, laws, loading, settings, None, &mut grab).unwrap();
-    let dir = std::env::temp_dir().join(format!("ribbar-resume-{}", std::process::id()));
+    let dir = std::env::temp_dir().join(format!("ribbar-resume-{}-{at}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("state.bin");
     grab.1.unwrap().save(&path).unwrap();
@@ -719,7 +769,7 @@ fn resume_case(m: &Model, laws: &ElementLaws, loading: &Loading, settings: &Solv
     std::fs::remove_dir_all(&dir).ok();
     assert_eq!(full.rows.len(), resumed.rows.len());
     assert!(
-        full.rows.len() > 6,
+        full.rows.len() > at + 2,
         "{:?}: too few steps",
         settings.linear_solver
     );
@@ -1043,7 +1093,7 @@ fn gmres_matches_direct_solve() {
     chol.factorize(&sym).unwrap();
     let b: Vec<f64> = (0..n).map(|i| (i as f64 * 0.7).sin() + 0.1).collect();
     let mut x = vec![0.0; n];
-    let info = gmres(a, &chol, &b, &mut x, 1e-12, 50).unwrap();
+    let info = gmres(&a, &chol, &b, &mut x, 1e-12, 50).unwrap();
     let mut dense = nalgebra::DMatrix::<f64>::zeros(n, n);
     for j in 0..n {
         for k in cp[j]..cp[j + 1] {
@@ -1133,4 +1183,188 @@ fn newton_krylov_beats_secant_iterations_in_softening() {
             "{a:?} vs {b:?}"
         );
     }
+}
+
+/// A slab pull-out whose soft, long bar stores more elastic energy at the
+/// bond's peak than the brittle interface can dissipate: past the peak the
+/// quasi-static path turns back in the imposed displacement (snap-back).
+fn snap_back_case() -> (Model, ElementLaws, Loading) {
+    let m = slab_pullout(8);
+    let brittle = Fczm {
+        tensile_strength: 3e6,
+        fracture_energy: 2.0,
+        lambda0: 2e-6,
+        delta_s: 1.0,
+        friction: 0.0,
+        zeta: 1.0,
+        gamma: DEFAULT_GAMMA,
+        min_damage: 0.0,
+        contact_smoothing: 0.0,
+    };
+    let laws = ElementLaws::by_region(
+        &m,
+        elastic(30e9, 0.2),
+        elastic(2e9, 0.3),
+        Arc::new(brittle),
+        None,
+    );
+    let loading = Loading {
+        u_final: 3e-4,
+        initial_step: 2e-6,
+        max_step: 1e-5,
+        min_step: 1e-10,
+        ..Loading::default()
+    };
+    (m, laws, loading)
+}
+
+struct Trace(Vec<(f64, f64, f64)>);
+impl Observer for Trace {
+    fn step_converged(&mut self, r: &StepReport, _: &CommittedView<'_>) {
+        self.0.push((r.row.u_imposed, r.row.force, r.row.fed));
+    }
+}
+
+/// Where the bond's softening releases more energy than the bar can take
+/// back, displacement control finds no equilibrium past the peak and
+/// stops; dissipation control follows the path back in the imposed
+/// displacement and on to the end (SPEC §6 path-following).
+#[test]
+fn dissipation_control_follows_a_snap_back() {
+    let (m, laws, loading) = snap_back_case();
+    let mut dtrace = Trace(Vec::new());
+    let displacement = solve_pullout(
+        &m,
+        &laws,
+        &loading,
+        &SolverSettings::default(),
+        None,
+        &mut dtrace,
+    );
+    assert!(
+        matches!(displacement, Err(SolveError::Stalled { .. })),
+        "displacement control should stop at the snap-back"
+    );
+    let settings = SolverSettings {
+        path_following: PathFollowing::Energy,
+        ..SolverSettings::default()
+    };
+    let mut trace = Trace(Vec::new());
+    let res = solve_pullout(&m, &laws, &loading, &settings, None, &mut trace);
+    let res = res.unwrap();
+    // λ decreased on the way, and the run reached the end of the loading.
+    assert!(trace.0.windows(2).any(|w| w[1].0 < w[0].0 - 1e-12));
+    assert!(res.rows.last().unwrap().u_imposed >= loading.u_final * (1.0 - 1e-9));
+    // A run resumed from a checkpoint taken under dissipation control, on
+    // the way back in λ, ends with the same curve (SPEC §6 resume).
+    let back = trace.0.windows(2).position(|w| w[1].0 < w[0].0).unwrap() + 2;
+    resume_at(back, &m, &laws, &loading, &settings);
+}
+
+/// A bar whose section yields before the bond fails ends at its limit
+/// load σ_y A as a result (`Ending::LimitLoad`), not as a failure of the
+/// solver and not by stretching the yielded overhang to the end of the
+/// loading: on the plastic plateau the bond sees no more load (SPEC §6).
+#[test]
+fn yielding_bar_ends_at_its_limit_load() {
+    let m = slab_pullout(6);
+    let f = Fczm {
+        tensile_strength: 2.16e6,
+        fracture_energy: 97.0,
+        lambda0: 5e-5,
+        delta_s: 0.16,
+        friction: 0.3,
+        zeta: 8.0,
+        gamma: DEFAULT_GAMMA,
+        min_damage: 0.0,
+        contact_smoothing: 0.0,
+    };
+    let steel: SharedBulkLaw = Arc::new(J2 {
+        young_modulus: 200e9,
+        poisson_ratio: 0.3,
+        yield_stress: 5e6,
+    });
+    let laws = ElementLaws::by_region(&m, elastic(30e9, 0.2), steel, Arc::new(f), None);
+    let loading = Loading {
+        u_final: 1e-4,
+        initial_step: 1e-6,
+        max_step: 1e-5,
+        ..Loading::default()
+    };
+    let res = solve_pullout(
+        &m,
+        &laws,
+        &loading,
+        &SolverSettings::default(),
+        None,
+        &mut Silent,
+    )
+    .expect("a limit load is a result");
+    let Ending::LimitLoad { force, yield_force } = res.ending else {
+        panic!("expected a limit load, got {:?}", res.ending);
+    };
+    // The slab bar's section is 4 mm × 4 mm.
+    assert!(
+        (yield_force - 5e6 * 16e-6).abs() < 1e-6 * yield_force,
+        "{yield_force}"
+    );
+    // Linear tets lock under isochoric plastic flow: the discrete limit
+    // load of this 6-element-wide bar lies some per cent above σ_y A
+    // (1.09 σ_y A here; docs/solver.md, "Limit loads").
+    assert!(
+        force >= 0.9 * yield_force && force <= 1.15 * yield_force,
+        "{force} of {yield_force}"
+    );
+    assert!(res.rows.last().unwrap().u_imposed < loading.u_final);
+}
+
+/// A bar whose interface debonds with no friction left (μ = 0) loses its
+/// load after the peak: the run ends there as `Ending::Unloaded`, with the
+/// peak and the last force, before the end of the loading (SPEC §6).
+#[test]
+fn debonded_frictionless_bar_ends_unloaded() {
+    let m = slab_pullout(6);
+    let f = Fczm {
+        tensile_strength: 2.16e6,
+        fracture_energy: 97.0,
+        lambda0: 5e-5,
+        delta_s: 0.16,
+        friction: 0.0,
+        zeta: 8.0,
+        gamma: DEFAULT_GAMMA,
+        min_damage: 0.0,
+        contact_smoothing: 0.0,
+    };
+    let laws = ElementLaws::by_region(
+        &m,
+        elastic(30e9, 0.2),
+        elastic(200e9, 0.3),
+        Arc::new(f),
+        None,
+    );
+    let loading = Loading {
+        u_final: 5e-3,
+        initial_step: 2e-6,
+        max_step: 5e-5,
+        ..Loading::default()
+    };
+    let res = solve_pullout(
+        &m,
+        &laws,
+        &loading,
+        &SolverSettings::default(),
+        None,
+        &mut Silent,
+    )
+    .expect("an unloaded specimen is a result");
+    let Ending::Unloaded {
+        force, peak_force, ..
+    } = res.ending
+    else {
+        panic!("expected the run to end unloaded, got {:?}", res.ending);
+    };
+    let largest = res.rows.iter().map(|r| r.force.abs()).fold(0.0, f64::max);
+    assert_eq!(peak_force, largest);
+    assert!(force.abs() <= 1e-3 * peak_force, "{force} of {peak_force}");
+    assert!(res.rows.last().unwrap().u_imposed < loading.u_final);
 }

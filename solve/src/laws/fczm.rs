@@ -70,6 +70,40 @@ pub struct Fczm {
     /// Lower bound of D (dimensionless, [0, 1]); 1 for contact.
     #[serde(default)]
     pub min_damage: f64,
+    /// Half-width δ (m) of the band |u_n| < δ over which the switch
+    /// between open and closed contact is smoothed; 0: the sharp switch of
+    /// eqs. (16)–(18), (25)–(26). See [`contact_ramp`]. Left out of the
+    /// serialised form when 0.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub contact_smoothing: f64,
+}
+
+fn is_zero(v: &f64) -> bool {
+    *v == 0.0
+}
+
+/// The compressive part ⟨u⟩₋ = min(u, 0) of a normal jump and its
+/// derivative, smoothed over |u| < δ by the quadratic −(u − δ)²/(4δ)
+/// (continuous slope; exact outside the band, −δ/4 at u = 0).
+///
+/// Every open/closed switch of the FCZM goes through this one function:
+/// the damaged part's contact stress K_n⟨u_n⟩₋ (16), the undamaged part's
+/// normal stiffness, λ_0/λ open and (1 − D)β closed (25), and through
+/// σ_dn the shear weight α (26). With δ = 0 the switch is a kink in all
+/// three: at a rib edge pressed by nearly zero normal traction Newton then
+/// alternates between the open and the closed branch (docs/solver.md,
+/// "Law switches").
+pub fn contact_ramp(u: f64, delta: f64) -> (f64, f64) {
+    if u < 0.0 && u <= -delta {
+        (u, 1.0)
+    } else if u >= 0.0 && u >= delta {
+        (0.0, 0.0)
+    } else {
+        (
+            -(u - delta) * (u - delta) / (4.0 * delta),
+            (delta - u) / (2.0 * delta),
+        )
+    }
 }
 
 impl Fczm {
@@ -85,6 +119,7 @@ impl Fczm {
             zeta: 1.0,
             gamma: DEFAULT_GAMMA,
             min_damage: 1.0,
+            contact_smoothing: 0.0,
         }
     }
     /// K_n = f_t/λ_0, N/m³.
@@ -136,8 +171,9 @@ impl InterfaceLaw for Fczm {
         let dr = dbig * (-self.lambda0 / (big * big));
 
         // Damaged part: no tension, Coulomb friction (16–21).
-        let sdn = kn * un.min(0.0);
-        let dsdn = if un < 0.0 { kn } else { 0.0 };
+        let (closed, dclosed) = contact_ramp(un, self.contact_smoothing);
+        let sdn = kn * closed;
+        let dsdn = kn * dclosed;
         let ret = slip_return(
             us,
             Vector2::new(committed.slip[0], committed.slip[1]),
@@ -145,25 +181,41 @@ impl InterfaceLaw for Fczm {
             -self.friction * sdn,
         );
 
-        // Undamaged part weights P = (1 − D)β, (1 − D)α and their gradients (23–26).
+        // Undamaged part (23–26): the normal traction
+        // N = K_n (P_o u_n + (P_c − P_o)⟨u_n⟩₋) with P_o = (1 − D)λ_0/λ (open)
+        // and P_c = (1 − D)β (closed), and the shear weight P_s = (1 − D)α.
         let e_n = Vector3::new(1.0, 0.0, 0.0);
-        let (pn, dpn, ps, dps);
+        // `normal_slope` is ∂N/∂u_n at fixed history, `normal_history` the
+        // rest of ∂N/∂u (through λ̃ while damage grows).
+        let (normal, normal_slope, normal_history, ps, dps);
         if q >= 1.0 {
-            (pn, dpn, ps, dps) = (1.0, Vector3::zeros(), 1.0, Vector3::zeros());
-        } else if un >= 0.0 {
-            let p = q * r;
-            let dp = dq * r + dr * q;
-            (pn, dpn, ps, dps) = (p, dp, p, dp);
+            (normal, normal_slope, normal_history) = (kn * un, kn, Vector3::zeros());
+            (ps, dps) = (1.0, Vector3::zeros());
         } else {
+            let (p_o, dp_o) = (q * r, dq * r + dr * q);
             // (1 − D)/(1 − D(λ̃)) in logarithms: no overflow of exp(c λ̃).
-            if floored {
-                pn = (floor_q.ln() + c * lt).exp();
-                dpn = dbig * (c * pn);
+            let (p_c, dp_c) = if floored {
+                let p = (floor_q.ln() + c * lt).exp();
+                (p, dbig * (c * p))
             } else {
-                pn = 1.0;
-                dpn = Vector3::zeros();
+                (1.0, Vector3::zeros())
+            };
+            if closed == 0.0 || closed == un {
+                // Outside the smoothing band: one branch of (25).
+                let (p, dp) = if closed == 0.0 {
+                    (p_o, dp_o)
+                } else {
+                    (p_c, dp_c)
+                };
+                (normal, normal_slope, normal_history) = (p * kn * un, p * kn, dp * (kn * un));
+            } else {
+                normal = kn * (p_o * un + (p_c - p_o) * closed);
+                normal_slope = kn * (p_o + (p_c - p_o) * dclosed);
+                normal_history = (dp_o * un + (dp_c - dp_o) * closed) * kn;
             }
-            if sdn <= self.gamma {
+            if sdn >= 0.0 {
+                (ps, dps) = (p_o, dp_o);
+            } else if sdn <= self.gamma {
                 ps = q * q;
                 dps = dq * (2.0 * q);
             } else {
@@ -177,21 +229,21 @@ impl InterfaceLaw for Fczm {
         }
 
         let traction = Vector3::new(
-            d * sdn + pn * kn * un,
+            d * sdn + normal,
             d * ret.tau[0] + ps * ks * us[0],
             d * ret.tau[1] + ps * ks * us[1],
         );
         let tangent = match kind {
             TangentKind::Elastic => self.elastic_stiffness(),
             TangentKind::Secant => Matrix3::from_diagonal(&Vector3::new(
-                d * dsdn + pn * kn,
+                d * dsdn + normal_slope,
                 d * ks * ret.ratio + ps * ks,
                 d * ks * ret.ratio + ps * ks,
             )),
             TangentKind::Consistent => {
                 let mut t = Matrix3::zeros();
                 // Normal row.
-                let row_n = e_n * (d * dsdn + pn * kn) + dd * sdn + dpn * (kn * un);
+                let row_n = e_n * (d * dsdn + normal_slope) + dd * sdn + normal_history;
                 t.set_row(0, &row_n.transpose());
                 // Tangential rows.
                 let dty_dun = -self.friction * dsdn;

@@ -58,6 +58,10 @@ impl J2 {
 }
 
 impl BulkLaw for J2 {
+    fn yield_stress(&self) -> Option<f64> {
+        Some(self.yield_stress)
+    }
+
     fn step(
         &self,
         committed: &BulkState,

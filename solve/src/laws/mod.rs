@@ -113,6 +113,13 @@ pub trait BulkLaw: Sync {
     fn extrapolate(&self, committed: &BulkState, _ratio: f64) -> BulkState {
         *committed
     }
+
+    /// The uniaxial stress beyond which the law cannot carry more (a
+    /// perfectly plastic yield stress), Pa; `None` for hardening or
+    /// softening laws.
+    fn yield_stress(&self) -> Option<f64> {
+        None
+    }
 }
 
 /// An interface constitutive law in the local frame.
@@ -236,6 +243,13 @@ impl BulkLaw for AnyBulkLaw {
             AnyBulkLaw::Mazars(l) => l.extrapolate(committed, ratio),
             AnyBulkLaw::J2(l) => l.extrapolate(committed, ratio),
             AnyBulkLaw::Elastic(l) => l.extrapolate(committed, ratio),
+        }
+    }
+
+    fn yield_stress(&self) -> Option<f64> {
+        match self {
+            AnyBulkLaw::J2(l) => l.yield_stress(),
+            _ => None,
         }
     }
 }

@@ -2,6 +2,7 @@
 //! atomically (bincode behind a format tag).
 
 use super::report::{CurveRow, Summary};
+use super::stepping::ControlMode;
 use crate::assembly::States;
 use crate::interface_element::INTERFACE_POINTS;
 use mesh::Model;
@@ -16,8 +17,10 @@ pub struct Checkpoint {
     pub n_interfaces: usize,
     /// λ of the last converged step, m.
     pub u_imposed: f64,
-    /// Size of the next step to try, m.
+    /// Size of the next step to try, m, in the unit `control_mode` says.
     pub next_step: f64,
+    /// What the steps prescribe at this point of the run.
+    pub control_mode: ControlMode,
     /// Global displacement, m.
     pub u: Vec<f64>,
     pub states: States,
@@ -31,8 +34,12 @@ pub struct Checkpoint {
     /// Global displacement increment of the last converged step (m; empty
     /// before the first), for the extrapolating predictor.
     pub last_increment: Vec<f64>,
-    /// Size of the last converged step, m (0 before the first).
+    /// Increment of λ in the last converged step, m (0 before the first).
     pub last_step: f64,
+    /// The generalised load Σ rate_a f_int,a of the last converged step,
+    /// N, and its increment in that step (dissipation control).
+    pub generalised_load: f64,
+    pub last_load_increment: f64,
 }
 
 /// The kept preconditioner of a run: the lower-triangle values (N/m) that
@@ -57,7 +64,7 @@ pub enum CheckpointError {
     Corrupt { path: String, detail: String },
 }
 
-const CHECKPOINT_MAGIC: u64 = 0x7269_6262_6172_0005;
+const CHECKPOINT_MAGIC: u64 = 0x7269_6262_6172_0006;
 
 impl Checkpoint {
     /// Writes atomically (temporary file then rename), bincode.

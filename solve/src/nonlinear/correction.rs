@@ -1,6 +1,7 @@
 //! The linear correction of a Newton iteration: the configured linear
-//! solver on the current tangent, with the factor kept across iterations
-//! and steps where it preconditions a Krylov method.
+//! solver on the current tangent, or on the tangent bordered by the
+//! path-following constraint (see `control`), with the factor kept across
+//! iterations and steps where it preconditions a Krylov method.
 //!
 //! The consistent tangent of Mazars (while damage grows) and of the FCZM
 //! (sliding, damage growth) is unsymmetric, and during softening its
@@ -10,6 +11,7 @@
 //! convergence), preconditioned by a factor kept while GMRES needs few
 //! iterations with it.
 
+use super::control::{Border, BorderedPreconditioner};
 use super::report::WallTimes;
 use super::workspace::Workspace;
 use crate::assembly::{Outputs, States, System, Tangents};
@@ -76,19 +78,21 @@ impl LinearState {
 }
 
 impl Workspace<'_> {
-    /// Solves for the Newton correction `du` of residual `r` at iterate `u`
-    /// (from `start`) with the configured linear solver; `eta` is the
-    /// Krylov relative tolerance.
+    /// Solves for the Newton correction `du` of the right-hand side `rhs`
+    /// at iterate `u` (from `start`) with the configured linear solver;
+    /// `eta` is the Krylov relative tolerance. With a `border`, `rhs` and
+    /// `du` hold one more entry (the constraint row, the load-factor
+    /// increment).
     pub(crate) fn correction(
         &mut self,
         start: &States,
         u: &[f64],
-        r: &[f64],
-        du: &mut [f64],
+        (rhs, du): (&[f64], &mut [f64]),
         eta: f64,
+        border: Option<&Border<'_>>,
     ) -> Result<(), LinearError> {
         if self.settings.linear_solver == LinearSolverKind::Gmres {
-            return self.newton_krylov(start, u, r, du, eta);
+            return self.newton_krylov(start, u, (rhs, du), eta, border);
         }
         if !self.upper.is_empty() {
             // Unsymmetric consistent tangent: keep its symmetric part.
@@ -96,7 +100,10 @@ impl Workspace<'_> {
                 *v = 0.5 * (*v + w);
             }
         }
-        if self.settings.linear_solver == LinearSolverKind::Pcg && self.lin.chol.is_factored() {
+        if self.settings.linear_solver == LinearSolverKind::Pcg
+            && self.lin.chol.is_factored()
+            && border.is_none()
+        {
             let t = Instant::now();
             let mat = SymLower {
                 col_ptr: &self.system.col_ptr,
@@ -106,7 +113,7 @@ impl Workspace<'_> {
             let res = pcg(
                 mat,
                 &self.lin.chol,
-                r,
+                rhs,
                 du,
                 self.settings.pcg_tolerance,
                 self.settings.pcg_max_iterations,
@@ -129,7 +136,7 @@ impl Workspace<'_> {
             // The factor preconditions later steps: keep what it was built from.
             self.lin.preconditioner.copy_from_slice(&self.lower);
         }
-        self.factor_solve(r, du)
+        self.factor_solve(rhs, du, border)
     }
 
     fn factorize(&mut self, values: &[f64]) -> Result<(), LinearError> {
@@ -140,11 +147,22 @@ impl Workspace<'_> {
         res
     }
 
-    /// du = (kept factor)⁻¹ r.
-    fn factor_solve(&mut self, r: &[f64], du: &mut [f64]) -> Result<(), LinearError> {
+    /// du = (kept factor, bordered when asked)⁻¹ rhs.
+    fn factor_solve(
+        &mut self,
+        rhs: &[f64],
+        du: &mut [f64],
+        border: Option<&Border<'_>>,
+    ) -> Result<(), LinearError> {
         let t = Instant::now();
-        du.copy_from_slice(r);
-        let out = self.lin.chol.solve_in_place(du);
+        du.copy_from_slice(rhs);
+        let out = match border {
+            None => self.lin.chol.solve_in_place(du),
+            Some(b) => BorderedPreconditioner::new(&self.lin.chol, b).and_then(|p| {
+                use crate::linear::Preconditioner;
+                p.apply(du)
+            }),
+        };
         self.wall.solve += t.elapsed().as_secs_f64();
         out
     }
@@ -177,67 +195,71 @@ impl Workspace<'_> {
         res
     }
 
-    /// GMRES on the full tangent, preconditioned by the kept factor;
-    /// refactorises (symmetric part, else secant) when there is none, when
-    /// the last solve needed more than half of `krylov_max_iterations`, or
-    /// when GMRES fails with the old factor. If GMRES fails even with a
-    /// fresh factor, the correction of the factorised matrix itself is used
-    /// (a quasi-Newton step; the line search and the iteration limit guard
-    /// it).
+    /// GMRES on the full tangent (bordered when asked), preconditioned by
+    /// the kept factor; refactorises (symmetric part, else secant) when
+    /// there is none, when the last solve needed more than half of
+    /// `krylov_max_iterations`, or when GMRES fails with the old factor. If
+    /// GMRES fails even with a fresh factor, the correction of the
+    /// factorised matrix itself is used (a quasi-Newton step; the line
+    /// search and the iteration limit guard it).
     fn newton_krylov(
         &mut self,
         start: &States,
         u: &[f64],
-        r: &[f64],
-        du: &mut [f64],
+        (rhs, du): (&[f64], &mut [f64]),
         eta: f64,
+        border: Option<&Border<'_>>,
     ) -> Result<(), LinearError> {
         let lower = std::mem::take(&mut self.lower);
         let upper = std::mem::take(&mut self.upper);
-        let out = self.newton_krylov_with((&lower, &upper), start, u, r, du, eta);
+        let system = self.system;
+        let a = SplitMatrix {
+            col_ptr: &system.col_ptr,
+            row_idx: &system.row_idx,
+            lower: &lower,
+            // A symmetric tangent kind has no separate upper values.
+            upper: if upper.is_empty() { &lower } else { &upper },
+        };
+        let out = (|| {
+            if self.lin.chol.is_factored()
+                && !self.lin.refactor
+                && self.try_gmres(a, border, rhs, du, eta)
+            {
+                return Ok(());
+            }
+            let mut pvals = std::mem::take(&mut self.lin.preconditioner);
+            a.symmetric_part(&mut pvals);
+            let res = self.factorize_spd(start, u, &mut pvals);
+            self.lin.preconditioner = pvals;
+            res?;
+            self.lin.refactor = false;
+            if self.try_gmres(a, border, rhs, du, eta) {
+                return Ok(());
+            }
+            self.lin.refactor = true;
+            self.factor_solve(rhs, du, border)
+        })();
         self.lower = lower;
         self.upper = upper;
         out
     }
 
-    fn newton_krylov_with(
+    /// One GMRES solve with the kept factor; whether it converged.
+    fn try_gmres(
         &mut self,
-        (lower, upper): (&[f64], &[f64]),
-        start: &States,
-        u: &[f64],
-        r: &[f64],
+        a: SplitMatrix<'_>,
+        border: Option<&Border<'_>>,
+        rhs: &[f64],
         du: &mut [f64],
         eta: f64,
-    ) -> Result<(), LinearError> {
-        let system = self.system;
-        let a = SplitMatrix {
-            col_ptr: &system.col_ptr,
-            row_idx: &system.row_idx,
-            lower,
-            // A symmetric tangent kind has no separate upper values.
-            upper: if upper.is_empty() { lower } else { upper },
-        };
-        if self.lin.chol.is_factored() && !self.lin.refactor && self.try_gmres(a, r, du, eta) {
-            return Ok(());
-        }
-        let mut pvals = std::mem::take(&mut self.lin.preconditioner);
-        a.symmetric_part(&mut pvals);
-        let res = self.factorize_spd(start, u, &mut pvals);
-        self.lin.preconditioner = pvals;
-        res?;
-        self.lin.refactor = false;
-        if self.try_gmres(a, r, du, eta) {
-            return Ok(());
-        }
-        self.lin.refactor = true;
-        self.factor_solve(r, du)
-    }
-
-    /// One GMRES solve with the kept factor; whether it converged.
-    fn try_gmres(&mut self, a: SplitMatrix<'_>, r: &[f64], du: &mut [f64], eta: f64) -> bool {
+    ) -> bool {
         let max = self.settings.krylov_max_iterations;
         let t = Instant::now();
-        let res = gmres(a, &self.lin.chol, r, du, eta, max);
+        let res = match border {
+            None => gmres(&a, &self.lin.chol, rhs, du, eta, max),
+            Some(b) => BorderedPreconditioner::new(&self.lin.chol, b)
+                .and_then(|p| gmres(&b.operator(&a), &p, rhs, du, eta, max)),
+        };
         self.wall.solve += t.elapsed().as_secs_f64();
         match res {
             Ok(info) => {

@@ -86,6 +86,14 @@ pub enum StepFailure {
         source: LinearError,
         regimes: RegimeChanges,
     },
+    /// Under indirect control the controlled quantity no longer responds
+    /// to the load factor: a limit load (the bar yields over its section)
+    /// or parts that separate without resistance.
+    #[error("the controlled free-end displacement does not respond to the imposed displacement (dFED/du = {slope:e}): a limit load or a separation")]
+    ControlSingular {
+        /// d(quantity)/dλ at fixed equilibrium, dimensionless.
+        slope: f64,
+    },
     #[error("no convergence in {iterations} iterations (last relative residual {relative_residual:e}). {regimes}")]
     IterationLimit {
         iterations: usize,

@@ -7,6 +7,7 @@
 //! `crate::problems::pullout` builds the pull-out test's conditions.
 
 mod checkpoint;
+mod control;
 mod correction;
 mod failure;
 mod newton;
@@ -19,6 +20,7 @@ pub use checkpoint::{Checkpoint, CheckpointError, PreconditionerState};
 pub use failure::{RegimeChanges, SolveError, StepFailure};
 pub use problem::{Dirichlet, Measurement};
 pub use report::{
-    CommittedView, CurveRow, Cutback, Observer, RunResult, Silent, StepReport, Summary, WallTimes,
+    CommittedView, CurveRow, Cutback, Ending, Observer, RunResult, Silent, StepReport, Summary,
+    WallTimes,
 };
-pub use stepping::run;
+pub use stepping::{run, ControlMode, Problem};

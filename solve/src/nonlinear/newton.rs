@@ -11,9 +11,10 @@
 //! tiny imposed increment, and the leftover imbalance of the previous step
 //! (converged to tol_r, not to zero) then looks like a large energy.
 
+use super::control::{Border, Control, Indirect};
 use super::failure::{RegimeChanges, StepFailure};
 use super::workspace::Workspace;
-use crate::assembly::{States, Tangents};
+use crate::assembly::{LoadDerivatives, States, Tangents};
 use crate::laws::TangentKind;
 use crate::linear::{dot, norm};
 use crate::spec::solver::{Forcing, SolverSettings};
@@ -29,6 +30,10 @@ pub(crate) struct Attempt {
     pub(crate) failure: Option<StepFailure>,
     /// Converged on the force criterion only (see `Summary::force_only_steps`).
     pub(crate) force_only: bool,
+    /// Of a failed attempt: the tets whose damage switched between growing
+    /// and not at least twice between iterates (the points Newton could
+    /// not settle).
+    pub(crate) flipping: Vec<usize>,
 }
 
 impl Attempt {
@@ -38,6 +43,7 @@ impl Attempt {
             history,
             failure: None,
             force_only,
+            flipping: Vec::new(),
         }
     }
     fn failed(iterations: usize, history: Vec<f64>, why: StepFailure) -> Self {
@@ -46,6 +52,7 @@ impl Attempt {
             history,
             failure: Some(why),
             force_only: false,
+            flipping: Vec::new(),
         }
     }
 }
@@ -59,169 +66,345 @@ fn constitutive(
     }
 }
 
+/// The running record of one Newton attempt.
+struct Record {
+    /// Relative residual of each iterate.
+    history: Vec<f64>,
+    /// The largest |Δu·r| of the attempt's corrections, and the last one
+    /// (scaled by the line search's step).
+    energy_ref: f64,
+    last_energy: f64,
+    /// ‖r‖ of the first iterate.
+    first_norm: f64,
+    /// Forcing term of the last correction and the residual it started from.
+    eta_prev: f64,
+    r_prev: f64,
+    /// Tangent kinds of the tets and of the interface elements: a
+    /// stagnating consistent-tangent Newton continues with the secant
+    /// matrix, from iteration `window`.
+    kinds: Tangents,
+    window: usize,
+    /// The iterate with the smallest relative residual (a stagnating
+    /// attempt may end on it).
+    best_rel: f64,
+    best_u: Vec<f64>,
+    best_lambda: Option<f64>,
+    /// Per tet: whether its damage grows at the last iterate, and how
+    /// often that changed between iterates.
+    growing: Vec<bool>,
+    flips: Vec<u8>,
+}
+
+impl Record {
+    fn new(settings: &SolverSettings, u: &[f64], control: &Control<'_>) -> Self {
+        Self {
+            history: Vec::new(),
+            energy_ref: 0.0,
+            last_energy: f64::INFINITY,
+            first_norm: 0.0,
+            eta_prev: 0.0,
+            r_prev: 0.0,
+            kinds: Tangents::all(settings.tangent),
+            window: 0,
+            best_rel: f64::INFINITY,
+            best_u: vec![0.0; u.len()],
+            best_lambda: control.lambda(),
+            growing: Vec::new(),
+            flips: Vec::new(),
+        }
+    }
+    fn failed(mut self, iterations: usize, why: StepFailure) -> Attempt {
+        self.failed_ref(iterations, why)
+    }
+    fn failed_ref(&mut self, iterations: usize, why: StepFailure) -> Attempt {
+        let mut attempt = Attempt::failed(iterations, std::mem::take(&mut self.history), why);
+        attempt.flipping = (0..self.flips.len())
+            .filter(|&i| self.flips[i] >= 2)
+            .collect();
+        attempt
+    }
+    /// Counts the tets whose damage growth changed since the last iterate.
+    fn track(&mut self, start: &States, trial: &States) {
+        let grows = |i: usize| trial.bulk[i].damage > start.bulk[i].damage;
+        if self.growing.is_empty() {
+            self.growing = (0..trial.bulk.len()).map(grows).collect();
+            self.flips = vec![0; trial.bulk.len()];
+            return;
+        }
+        for (i, (g, f)) in self.growing.iter_mut().zip(&mut self.flips).enumerate() {
+            let now = grows(i);
+            if now != *g {
+                *g = now;
+                *f = f.saturating_add(1);
+            }
+        }
+    }
+}
+
 impl Workspace<'_> {
     /// Newton iterations from the iterate `u` (Dirichlet values already
     /// set) and the step's start states `start`, for a step of size
-    /// `step_size` (m). On return `u`, `trial` and `f_int` hold the last
-    /// (or the accepted) iterate.
-    pub(crate) fn newton(&mut self, start: &States, u: &mut [f64], step_size: f64) -> Attempt {
+    /// `step_size` (m), with the loading held by `control`. On return `u`,
+    /// `trial`, `f_int` and the control's λ hold the last (or the
+    /// accepted) iterate.
+    pub(crate) fn newton(
+        &mut self,
+        start: &States,
+        u: &mut [f64],
+        step_size: f64,
+        control: &mut Control<'_>,
+    ) -> Attempt {
         let settings = self.settings;
         let dofs = self.system.dofs();
         let n_free = dofs.n_free();
-        let mut history = Vec::new();
+        let mut rec = Record::new(settings, u, control);
         let mut r = vec![0.0; n_free];
         let mut du = vec![0.0; n_free];
-        let mut energy_ref = 0.0f64;
-        let mut last_energy = f64::INFINITY;
         // Correction of the previous iteration (for the line search).
         let mut prev: Option<(Vec<f64>, f64)> = None;
-        let mut first_norm = 0.0;
-        // Forcing term of the last correction and the residual it started from.
-        let mut eta_prev = 0.0f64;
-        let mut r_prev = 0.0f64;
-        // Tangent kinds of the tets and of the interface elements: a stagnating
-        // consistent-tangent Newton continues with the secant matrix (see
-        // below), from iteration `window`.
-        let mut kinds = Tangents::all(settings.tangent);
-        let mut window = 0;
-        // The iterate with the smallest relative residual (a stagnating
-        // attempt may end on it, see below).
-        let mut best_rel = f64::INFINITY;
-        let mut best_u = vec![0.0; u.len()];
         for k in 0..=settings.max_iterations {
-            if let Err(e) = self.evaluate(start, u, kinds) {
-                return Attempt::failed(k, history, constitutive(false)(e));
+            if let Err(e) = self.evaluate(start, u, rec.kinds) {
+                return rec.failed(k, constitutive(false)(e));
             }
+            rec.track(start, &self.trial);
             self.residual(&mut r);
             if let (true, Some((d, g0))) = (settings.line_search, prev.as_ref()) {
-                match self.line_search(start, u, kinds, d, *g0, r_prev, &mut r) {
-                    Ok(s) => last_energy *= s,
-                    Err(e) => return Attempt::failed(k, history, e),
+                let line = (d.as_slice(), *g0);
+                match self.line_search(
+                    start,
+                    (u, &mut *control),
+                    rec.kinds,
+                    line,
+                    rec.r_prev,
+                    &mut r,
+                ) {
+                    Ok(s) => rec.last_energy *= s,
+                    Err(e) => return rec.failed(k, e),
                 }
             }
             let reaction = self.reaction_norm();
             let rnorm = norm(&r);
             if !rnorm.is_finite() {
-                return Attempt::failed(k, history, StepFailure::NonFiniteResidual);
+                return rec.failed(k, StepFailure::NonFiniteResidual);
             }
+            // Once the specimen has unloaded (parts separated, the bar
+            // pulled free) the reactions are round-off; the criterion then
+            // refers to a share of the largest load instead.
+            let reaction = reaction.max(self.force_floor);
             let scale = if reaction > 0.0 { reaction } else { 1.0 };
-            history.push(rnorm / scale);
+            rec.history.push(rnorm / scale);
             // The predictor (k = 0) counts: at a threshold the first correction
             // can cross to the worse side of the cycle (R1 with δ_s = 0.02 and
             // 1: predictor 1.8e-4, best later iterate 2.2e-4).
-            if rnorm / scale < best_rel {
-                best_rel = rnorm / scale;
-                best_u.copy_from_slice(u);
+            if rnorm / scale < rec.best_rel {
+                rec.best_rel = rnorm / scale;
+                rec.best_u.copy_from_slice(u);
+                rec.best_lambda = control.lambda();
             }
             if k == 0 {
-                first_norm = rnorm;
+                rec.first_norm = rnorm;
             }
+            let held = match control {
+                Control::Displacement => true,
+                Control::Indirect(c) => {
+                    c.constraint.residual(u, c.lambda, &self.f_int).abs()
+                        <= c.constraint
+                            .tolerance(settings.residual_tolerance, step_size)
+                }
+            };
             if k > 0
                 && rnorm <= settings.residual_tolerance * scale
-                && last_energy <= settings.energy_tolerance * energy_ref.max(scale * step_size)
+                && rec.last_energy
+                    <= settings.energy_tolerance
+                        * rec.energy_ref.max(control.work_scale(scale, step_size))
+                && held
             {
-                return Attempt::converged(k, history, false);
+                return Attempt::converged(k, rec.history, false);
             }
             if k == settings.max_iterations {
                 break;
             }
-            // Stagnation (switching stick/slip or loading/unloading points that
-            // Newton cannot settle): the last 4 residuals all above half the
-            // best before them. A cut-back now is cheaper than more iterations.
-            if k >= window + 8 {
-                let best_before = history[window..k - 3]
-                    .iter()
-                    .copied()
-                    .fold(f64::INFINITY, f64::min);
-                let stagnating = history[k - 3..].iter().all(|&v| v > 0.5 * best_before);
-                if stagnating
-                    && best_rel <= settings.stagnation_acceptance * settings.residual_tolerance
-                {
-                    // Points flipping between law branches hold Newton in a
-                    // cycle whose best iterate is (nearly) in equilibrium; more
-                    // iterations only flip them back and forth, and the energy
-                    // criterion measures the flips. End on the best iterate.
-                    // Checked before the secant switch (docs/solver.md,
-                    // Stagnation).
-                    if rnorm / scale > best_rel {
-                        u.copy_from_slice(&best_u);
-                        if let Err(e) = self.evaluate(start, u, kinds) {
-                            return Attempt::failed(k, history, constitutive(false)(e));
-                        }
-                    }
-                    return Attempt::converged(k, history, true);
-                }
-                if stagnating && kinds != Tangents::all(TangentKind::Secant) {
-                    // Points switching between branches (damage growing or not,
-                    // stick or slip) make the consistent tangent jump from one
-                    // iterate to the next; the secant matrix does not
-                    // (docs/solver.md, Stagnation).
-                    kinds = Tangents::all(TangentKind::Secant);
-                    window = k;
-                } else if stagnating {
-                    return Attempt::failed(
-                        k,
-                        history,
-                        StepFailure::Stagnating {
-                            relative_residual: rnorm / scale,
-                            regimes: RegimeChanges::between(start, &self.trial),
-                        },
-                    );
-                }
+            if let Some(end) = self.stagnation(k, &mut rec, rnorm / scale, (start, u, control)) {
+                return end;
             }
-            if rnorm > 1e8 * first_norm.max(scale) {
-                return Attempt::failed(
-                    k,
-                    history,
-                    StepFailure::Diverging {
-                        residual: rnorm,
-                        regimes: RegimeChanges::between(start, &self.trial),
-                    },
-                );
-            }
-            let eta = forcing_term(settings, k, rnorm, r_prev, eta_prev, scale);
-            eta_prev = eta;
-            r_prev = rnorm;
-            if let Err(source) = self.correction(start, u, &r, &mut du, eta) {
+            if rnorm > 1e8 * rec.first_norm.max(scale) {
                 let regimes = RegimeChanges::between(start, &self.trial);
-                return Attempt::failed(k, history, StepFailure::LinearSolve { source, regimes });
+                let why = StepFailure::Diverging {
+                    residual: rnorm,
+                    regimes,
+                };
+                return rec.failed(k, why);
             }
-            let g0 = dot(&du, &r);
-            if !g0.is_finite() {
-                return Attempt::failed(k, history, StepFailure::NonFiniteCorrection);
-            }
+            let eta = forcing_term(settings, k, rnorm, rec.r_prev, rec.eta_prev, scale);
+            rec.eta_prev = eta;
+            rec.r_prev = rnorm;
+            let g0 = match self.newton_correction(start, (u, &mut *control), &r, &mut du, eta) {
+                Ok(g0) => g0,
+                Err(why) => return rec.failed(k, why),
+            };
             if k == 0 && g0 == 0.0 {
-                return Attempt::converged(1, history, false);
+                return Attempt::converged(1, rec.history, false);
             }
-            energy_ref = energy_ref.max(g0.abs());
-            last_energy = g0.abs();
+            rec.energy_ref = rec.energy_ref.max(g0.abs());
+            rec.last_energy = g0.abs();
             dofs.scatter_add(&du, 1.0, u);
+            control.advance(1.0, u);
             prev = Some((du.clone(), g0));
         }
         let why = StepFailure::IterationLimit {
             iterations: settings.max_iterations,
-            relative_residual: history.last().copied().unwrap_or(f64::NAN),
+            relative_residual: rec.history.last().copied().unwrap_or(f64::NAN),
             regimes: RegimeChanges::between(start, &self.trial),
         };
-        Attempt::failed(settings.max_iterations, history, why)
+        rec.failed(settings.max_iterations, why)
+    }
+
+    /// Stagnation (switching stick/slip or loading/unloading points that
+    /// Newton cannot settle): from iteration `window` + 8 on, the last 4
+    /// residuals all above half the best before them. The attempt then
+    /// ends on its best iterate if that one is within
+    /// `stagnation_acceptance` × the force tolerance (points flipping
+    /// between law branches hold Newton in a cycle whose best iterate is
+    /// nearly in equilibrium; checked before the secant switch), else the
+    /// consistent tangent gives way to the secant matrix (which does not
+    /// jump between iterates), else the attempt fails (a cut-back is
+    /// cheaper than more iterations). docs/solver.md, Stagnation.
+    fn stagnation(
+        &mut self,
+        k: usize,
+        rec: &mut Record,
+        relative: f64,
+        (start, u, control): (&States, &mut [f64], &mut Control<'_>),
+    ) -> Option<Attempt> {
+        let settings = self.settings;
+        if k < rec.window + 8 {
+            return None;
+        }
+        let history = &rec.history;
+        let best_before = history[rec.window..k - 3]
+            .iter()
+            .copied()
+            .fold(f64::INFINITY, f64::min);
+        if !history[k - 3..].iter().all(|&v| v > 0.5 * best_before) {
+            return None;
+        }
+        if rec.best_rel <= settings.stagnation_acceptance * settings.residual_tolerance {
+            if relative > rec.best_rel {
+                u.copy_from_slice(&rec.best_u);
+                if let (Control::Indirect(c), Some(l)) = (&mut *control, rec.best_lambda) {
+                    c.lambda = l;
+                }
+                if let Err(e) = self.evaluate(start, u, rec.kinds) {
+                    return Some(rec.failed_ref(k, constitutive(false)(e)));
+                }
+            }
+            return Some(Attempt::converged(
+                k,
+                std::mem::take(&mut rec.history),
+                true,
+            ));
+        }
+        if rec.kinds != Tangents::all(TangentKind::Secant) {
+            rec.kinds = Tangents::all(TangentKind::Secant);
+            rec.window = k;
+            return None;
+        }
+        let why = StepFailure::Stagnating {
+            relative_residual: relative,
+            regimes: RegimeChanges::between(start, &self.trial),
+        };
+        Some(rec.failed_ref(k, why))
+    }
+
+    /// The Newton correction `du` of residual `r` (bordered under indirect
+    /// control, whose Δλ it stores in the control); returns Δu·r.
+    /// The tangent predictor of a displacement-controlled step of size
+    /// `increment` with no previous increment to extrapolate (the first
+    /// step, or a resume without one): from the start displacement `u`
+    /// (Dirichlet values of the start), the linear response
+    /// K Δu = r − (∂f_int/∂λ) Δλ of the start states. The Dirichlet-only
+    /// iterate strains the single layer of elements next to the loaded end
+    /// by the whole increment (5 µm over a 1 mm tet yields a 365 MPa bar)
+    /// and Newton then starts from plastic states the converged step never
+    /// reaches (docs/solver.md, "First step"). Leaves `u` unchanged and
+    /// returns false where the linear solve fails.
+    pub(crate) fn tangent_predictor(
+        &mut self,
+        start: &States,
+        u: &mut [f64],
+        increment: f64,
+    ) -> bool {
+        let n_free = self.system.dofs().n_free();
+        let kept = self.load.replace(LoadDerivatives::new(n_free));
+        let evaluated = self.evaluate(start, u, Tangents::all(self.settings.tangent));
+        let load = std::mem::replace(&mut self.load, kept).expect("set above");
+        if evaluated.is_err() {
+            return false;
+        }
+        let mut rhs = vec![0.0; n_free];
+        self.residual(&mut rhs);
+        rhs.iter_mut()
+            .zip(&load.column)
+            .for_each(|(r, c)| *r -= c * increment);
+        let mut du = vec![0.0; n_free];
+        let eta = self.settings.krylov_tolerance;
+        if self
+            .correction(start, u, (&rhs, &mut du), eta, None)
+            .is_err()
+            || du.iter().any(|v| !v.is_finite())
+        {
+            return false;
+        }
+        self.system.dofs().scatter_add(&du, 1.0, u);
+        true
+    }
+
+    fn newton_correction(
+        &mut self,
+        start: &States,
+        (u, control): (&[f64], &mut Control<'_>),
+        r: &[f64],
+        du: &mut [f64],
+        eta: f64,
+    ) -> Result<f64, StepFailure> {
+        let n_free = r.len();
+        let solved = match control {
+            Control::Displacement => self.correction(start, u, (r, du), eta, None),
+            Control::Indirect(c) => {
+                let mut rhs = vec![0.0; n_free + 1];
+                let mut both = vec![0.0; n_free + 1];
+                let solved = self.bordered_correction(start, u, c, (r, &mut rhs), &mut both, eta);
+                du.copy_from_slice(&both[..n_free]);
+                c.increment = both[n_free];
+                solved
+            }
+        };
+        if let Err(source) = solved {
+            let regimes = RegimeChanges::between(start, &self.trial);
+            return Err(StepFailure::LinearSolve { source, regimes });
+        }
+        let g0 = dot(du, r);
+        if !g0.is_finite() {
+            return Err(StepFailure::NonFiniteCorrection);
+        }
+        Ok(g0)
     }
 
     /// After a full correction `d` (with g0 = d·r before it): if it
     /// overshot the energy minimum along its direction and did not reduce
-    /// the residual (‖r‖ above `r_prev`), tries the secant root. The
+    /// the residual (‖r‖ above `r_prev`), tries the secant root (λ follows
+    /// the correction's Δλ under indirect control). The
     /// unsymmetric tangent has no potential, so a shorter step is kept only
     /// if its residual is smaller than the full step's; and a step shorter
     /// than [`LINE_SEARCH_MIN_STEP`] is never kept (docs/solver.md, "The
     /// softening-branch stall"). Returns the step length kept; `u`, the
     /// workspace's iterate and `r` are left at it.
-    #[allow(clippy::too_many_arguments)]
     fn line_search(
         &mut self,
         start: &States,
-        u: &mut [f64],
+        (u, control): (&mut [f64], &mut Control<'_>),
         kinds: Tangents,
-        d: &[f64],
-        g0: f64,
+        (d, g0): (&[f64], f64),
         r_prev: f64,
         r: &mut [f64],
     ) -> Result<f64, StepFailure> {
@@ -234,6 +417,7 @@ impl Workspace<'_> {
         while g < 0.0 && g.abs() > 0.5 * g0 && full_norm > r_prev && tries < 4 {
             let s_new = (s * g0 / (g0 - g)).clamp(0.1 * s, 0.9 * s);
             dofs.scatter_add(d, s_new - s, u);
+            control.advance(s_new - s, u);
             s = s_new;
             self.evaluate(start, u, kinds).map_err(constitutive(true))?;
             self.residual(r);
@@ -249,11 +433,50 @@ impl Workspace<'_> {
         }
         if s != best.0 {
             dofs.scatter_add(d, best.0 - s, u);
+            control.advance(best.0 - s, u);
             s = best.0;
             self.evaluate(start, u, kinds).map_err(constitutive(true))?;
             self.residual(r);
         }
         Ok(s)
+    }
+}
+
+impl Workspace<'_> {
+    /// The correction of the bordered system (see `control`): right-hand
+    /// side (r, −s g) with the constraint row scaled by s = ‖k_λ‖/‖(gᵤ, g_λ)‖,
+    /// so that GMRES weighs both alike; `du` receives (Δu, Δλ).
+    fn bordered_correction(
+        &mut self,
+        start: &States,
+        u: &[f64],
+        c: &Indirect<'_>,
+        (r, rhs): (&[f64], &mut [f64]),
+        du: &mut [f64],
+        eta: f64,
+    ) -> Result<(), crate::linear::LinearError> {
+        let load = self.load.take().unwrap_or_default();
+        let n = r.len();
+        let mut row = std::mem::take(&mut self.constraint_row);
+        row.resize(n, 0.0);
+        let row_lambda = c.constraint.gradient(&load, &mut row);
+        let g_norm = (dot(&row, &row) + row_lambda * row_lambda).sqrt();
+        let scale = match norm(&load.column) / g_norm {
+            s if s.is_finite() && s > 0.0 => s,
+            _ => 1.0,
+        };
+        rhs[..n].copy_from_slice(r);
+        rhs[n] = -scale * c.constraint.residual(u, c.lambda, &self.f_int);
+        let border = Border {
+            column: &load.column,
+            row: &row,
+            row_lambda,
+            scale,
+        };
+        let out = self.correction(start, u, (rhs, du), eta, Some(&border));
+        self.load = Some(load);
+        self.constraint_row = row;
+        out
     }
 }
 

@@ -64,6 +64,19 @@ impl Default for Measurement {
 }
 
 impl Measurement {
+    /// The relative displacement as weights on global DOFs (mean over
+    /// `plus` minus mean over `minus`).
+    pub fn relative_weights(&self) -> Vec<(usize, f64)> {
+        let mut w = Vec::new();
+        for (ds, sign) in [(&self.plus_dofs, 1.0), (&self.minus_dofs, -1.0)] {
+            if !ds.is_empty() {
+                let each = sign / ds.len() as f64;
+                w.extend(ds.iter().map(|&d| (d, each)));
+            }
+        }
+        w
+    }
+
     /// (force N, relative displacement m, stress Pa) of a state.
     pub(crate) fn eval(&self, u: &[f64], f_int: &[f64]) -> (f64, f64, f64) {
         let force: f64 = self.force_factor * self.force_dofs.iter().map(|&d| f_int[d]).sum::<f64>();

@@ -81,6 +81,16 @@ pub struct Summary {
     /// `SolverSettings::impl_ex_tolerance`); 0 for implicit integration.
     #[serde(default)]
     pub impl_ex_max_residual: f64,
+    /// Tets whose damage is integrated explicitly (IMPL-EX): all under
+    /// `concrete_integration: impl_ex`, else the degenerate ones
+    /// (`solver.sliver_quality`).
+    #[serde(default)]
+    pub explicit_tets: usize,
+    /// Attempts repeated with the tets whose damage switched between
+    /// growing and not between Newton iterates integrated explicitly
+    /// (their error is in `impl_ex_max_residual`).
+    #[serde(default)]
+    pub explicit_retries: usize,
     pub wall_time_s: WallTimes,
 }
 
@@ -91,6 +101,36 @@ pub struct RunResult {
     pub summary: Summary,
     /// The last converged state (for fields and restarts).
     pub last: Checkpoint,
+    /// How the run ended.
+    pub ending: Ending,
+}
+
+/// How a run that returned a result ended.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum Ending {
+    /// The loading reached its end (`u_final` or `fed_stop`).
+    Completed,
+    /// The loaded member yields over its section: no quasi-static state
+    /// carries more load, so the run ends there, its curve a result.
+    LimitLoad {
+        /// The last converged force (whole specimen), N.
+        force: f64,
+        /// σ_y times the member's section (whole specimen), N.
+        yield_force: f64,
+    },
+    /// After its peak the specimen carries less than 0.1 % of the peak
+    /// load: the cube split through or the bar pulled free, and there is
+    /// no load left to follow.
+    Unloaded {
+        /// The last converged force (whole specimen), N.
+        force: f64,
+        /// The largest |F| of the run (whole specimen), N.
+        peak_force: f64,
+        /// Concrete tets with D > 0.99 (a crack through the cube shows as
+        /// a layer of them).
+        broken_concrete_tets: usize,
+    },
 }
 
 /// Per converged step, for progress output.

@@ -1,24 +1,79 @@
-//! Adaptive load stepping: λ (the imposed displacement) from the start or
-//! a checkpoint to the end of the loading, one Newton attempt per try,
-//! cut-back on failure, growth after easy steps, IMPL-EX step control, and
-//! the committed state offered to the observer after every converged step.
+//! Adaptive load stepping from the start or a checkpoint to the end of the
+//! loading: one Newton attempt per try, cut-back on failure, growth after
+//! easy steps, IMPL-EX step control, the choice of what a step prescribes
+//! (the imposed displacement λ, or the free-end displacement under
+//! path-following, see `control`), and the committed state offered to the
+//! observer after every converged step.
 
 use super::checkpoint::{Checkpoint, PreconditionerState};
+use super::control::{generalised_load, Constraint, Control, Indirect, Quantity};
 use super::correction::LinearState;
-use super::failure::SolveError;
+use super::failure::{RegimeChanges, SolveError, StepFailure};
+use super::newton::Attempt;
 use super::problem::{Dirichlet, Measurement};
 use super::report::{
-    CommittedView, CurveRow, Cutback, Observer, RunResult, StepReport, Summary, WallTimes,
+    CommittedView, CurveRow, Cutback, Ending, Observer, RunResult, StepReport, Summary, WallTimes,
 };
 use super::workspace::{reaction_norm, residual, Workspace};
-use crate::assembly::{AssemblyError, ElementLaws, Outputs, States, System, Tangents};
+use crate::assembly::{
+    AssemblyError, ElementLaws, LoadDerivatives, Outputs, States, System, Tangents,
+};
 use crate::laws::TangentKind;
 use crate::linear::norm;
 use crate::spec::solver::{
-    ConcreteIntegration, LinearSolverKind, Loading, Predictor, SolverSettings,
+    ConcreteIntegration, LinearSolverKind, Loading, PathFollowing, Predictor, SolverSettings,
 };
 use mesh::Model;
+use serde::{Deserialize, Serialize};
 use std::time::Instant;
+
+/// The problem a run solves: the model with its laws, the Dirichlet
+/// conditions that λ moves, and what is measured per step.
+#[derive(Clone, Copy)]
+pub struct Problem<'a> {
+    pub model: &'a Model,
+    pub laws: &'a ElementLaws,
+    pub dirichlet: &'a Dirichlet,
+    pub measurement: &'a Measurement,
+    /// The measured force (whole specimen, N) at which the loaded member
+    /// yields over its section, if its law has a yield limit: a run that
+    /// stalls there ends at this limit load instead of failing.
+    pub yield_force: Option<f64>,
+}
+
+/// What the steps of a run prescribe at the moment (the unit of its step
+/// size).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub enum ControlMode {
+    /// λ, the imposed displacement.
+    #[default]
+    Displacement,
+    /// The free-end displacement (indirect displacement control).
+    FreeEnd,
+    /// The energy released by the step (dissipation control), J.
+    Energy,
+}
+
+/// A step dissipates when the energy it releases exceeds this fraction of
+/// the external work it takes; dissipation control starts there.
+const DISSIPATIVE: f64 = 0.1;
+/// Dissipation control hands back to displacement control when a step
+/// releases less than this fraction of its external work.
+const ELASTIC: f64 = 0.05;
+/// After a failed displacement-controlled step, dissipation control takes
+/// over if the last converged step released at least this fraction of its
+/// work.
+const STARTS_DISSIPATING: f64 = 1e-3;
+/// How often a step is retried with its flip-flopping tets made explicit
+/// before it is cut back.
+const RETRIES: usize = 2;
+/// A stall at this share of the yield force or more is a limit load.
+const LIMIT_SHARE: f64 = 0.9;
+/// A step on the yield plateau changes the force by less than this
+/// fraction of it.
+const PLATEAU: f64 = 1e-3;
+/// A load below this fraction of its largest value counts as unloaded.
+const UNLOADED: f64 = 1e-3;
 
 /// The converged state of a run between steps.
 struct Path {
@@ -29,28 +84,82 @@ struct Path {
     summary: Summary,
     /// λ of the last converged step, m.
     lambda: f64,
-    /// Size of the next step to try, m.
+    /// What the next step prescribes, and its size (m).
+    mode: ControlMode,
     next_step: f64,
-    /// Increment and size of the last converged step (the predictor's).
+    /// Global displacement increment and Δλ of the last converged step
+    /// (the predictor's; empty and 0 before the first).
     last_increment: Vec<f64>,
-    last_step: f64,
+    last_lambda_increment: f64,
+    /// The generalised load F = Σ rate_a f_int,a of the last converged
+    /// step (N) and its increment in that step.
+    load: f64,
+    last_load_increment: f64,
+    /// Whether the steel's plastic strain grew in the last converged step.
+    steel_yielding: bool,
 }
 
-/// Displacement-controlled run: λ from the checkpoint's value (or 0) to
-/// `loading.u_final` (or until the measured relative displacement reaches
-/// `loading.fed_stop`), adaptive steps, Newton with line search.
-#[allow(clippy::too_many_arguments)]
+impl Path {
+    /// Energy released ½(F_0 λ − F λ_0) and external work ½(F_0 + F)Δλ of
+    /// the last converged step (J).
+    fn last_energies(&self) -> (f64, f64) {
+        let (l, f) = (self.lambda, self.load);
+        let (l0, f0) = (l - self.last_lambda_increment, f - self.last_load_increment);
+        (0.5 * (f0 * l - f * l0), 0.5 * (f0 + f) * (l - l0))
+    }
+}
+
+/// One step's plan: what it prescribes, how far, and the predictor's
+/// scale of the last increment.
+struct Plan {
+    mode: ControlMode,
+    size: f64,
+    /// λ (displacement control) or FED (indirect) at the end of the step, m.
+    target: f64,
+    /// The predictor's multiple of the last increment (0: none).
+    scale: f64,
+}
+
+/// Everything a run works with besides its path.
+struct Driver<'a> {
+    problem: Problem<'a>,
+    loading: &'a Loading,
+    settings: &'a SolverSettings,
+    ws: Workspace<'a>,
+    /// The free-end displacement as a linear quantity (indirect control).
+    fed: Quantity,
+    /// The DOFs that move with λ and their rates.
+    rates: Vec<(usize, f64)>,
+    /// The tets whose damage a step takes from an extrapolation of their
+    /// history (IMPL-EX): every tet under `concrete_integration: impl_ex`,
+    /// else the degenerate ones (quality below `solver.sliver_quality`).
+    explicit: Vec<bool>,
+    /// The committed states with the extrapolated damage of the explicit
+    /// tets for the step being attempted; `None` when there are none.
+    extrapolated: Option<States>,
+    /// Wall times of this invocation, and of the run before a resume.
+    wall: WallTimes,
+    previous_wall: WallTimes,
+    started: Instant,
+}
+
+/// Runs the loading from the checkpoint's state (or the start) to
+/// `loading.u_final` or `loading.fed_stop`, adaptive steps, Newton with
+/// line search; under `solver.path_following` the steps after the first
+/// prescribe the free-end displacement.
 pub fn run(
-    model: &Model,
-    laws: &ElementLaws,
-    dirichlet: &Dirichlet,
-    measurement: &Measurement,
+    problem: &Problem<'_>,
     loading: &Loading,
     settings: &SolverSettings,
     checkpoint: Option<Checkpoint>,
     observer: &mut dyn Observer,
 ) -> Result<RunResult, SolveError> {
-    let t_start = Instant::now();
+    let Problem {
+        model,
+        laws,
+        dirichlet,
+        ..
+    } = *problem;
     if laws.tets.len() != model.tets.len() || laws.interfaces.len() != model.interfaces.len() {
         return Err(SolveError::Model(format!(
             "{} tet laws for {} tets, {} interface laws for {} interface elements",
@@ -60,331 +169,788 @@ pub fn run(
             model.interfaces.len()
         )));
     }
+    let started = Instant::now();
     let active: Vec<bool> = laws.interfaces.iter().map(|l| l.is_some()).collect();
-    let mut wall = WallTimes::default();
     let system = System::new(model, &dirichlet.dofs, &dirichlet.load_rates(), &active)?;
-    let n_total = system.dofs().n_total();
-    let n_free = system.dofs().n_free();
-    let lin = LinearState::new(&system, settings, &mut wall)?;
-    let mut ws = Workspace {
-        system: &system,
-        laws,
-        settings,
-        trial: States::default(),
-        f_int: vec![0.0; n_total],
-        lower: vec![0.0; system.nnz()],
-        upper: if settings.tangent == TangentKind::Consistent {
-            vec![0.0; system.nnz()]
-        } else {
-            Vec::new()
-        },
-        lin,
-        wall: WallTimes::default(),
-    };
+    let mut driver = Driver::new(*problem, loading, settings, &system, started)?;
     let mut path = match checkpoint {
-        Some(cp) => resume(&mut ws, model, cp, n_total, &mut wall)?,
-        None => Path {
-            u: vec![0.0; n_total],
-            committed: States::initial(model),
-            rows: Vec::new(),
-            summary: Summary {
-                dofs: n_free,
-                ..Summary::default()
-            },
-            lambda: 0.0,
-            next_step: loading.initial_step,
-            last_increment: Vec::new(),
-            last_step: 0.0,
-        },
+        Some(cp) => driver.resume(cp)?,
+        None => driver.start(),
     };
-    let previous_wall = path.summary.wall_time_s;
+    driver.previous_wall = path.summary.wall_time_s;
     path.summary.wall_time_s = WallTimes::default();
-    ws.trial = path.committed.clone();
-    let done_eps = 1e-9 * loading.u_final;
-
-    let make_cp = |path: &Path, h: f64, lin: &LinearState| Checkpoint {
-        n_nodes: model.nodes.len(),
-        n_tets: model.tets.len(),
-        n_interfaces: model.interfaces.len(),
-        u_imposed: path.lambda,
-        next_step: h,
-        u: path.u.clone(),
-        states: path.committed.clone(),
-        rows: path.rows.clone(),
-        summary: path.summary.clone(),
-        preconditioner: (settings.linear_solver != LinearSolverKind::Cholesky
-            && lin.chol.is_factored())
-        .then(|| PreconditionerState {
-            values: lin.preconditioner.clone(),
-            refactor: lin.refactor,
-        }),
-        last_increment: path.last_increment.clone(),
-        last_step: path.last_step,
-    };
-    let finish = |summary: &mut Summary, wall: &WallTimes| {
-        let mut w = previous_wall;
-        let mut now = *wall;
-        now.total = t_start.elapsed().as_secs_f64();
-        w.add(&now);
-        summary.wall_time_s = w;
-    };
-    let partial = |mut path: Path, h: f64, lin: &LinearState, wall: &WallTimes| {
-        finish(&mut path.summary, wall);
-        let last = make_cp(&path, h, lin);
-        Box::new(RunResult {
-            rows: path.rows,
-            summary: path.summary,
-            last,
-        })
-    };
-
-    // IMPL-EX: the committed states with the extrapolated damage of the
-    // step being attempted.
-    let mut extrapolated = (settings.concrete_integration == ConcreteIntegration::ImplEx)
+    driver.ws.trial = path.committed.clone();
+    path.summary.explicit_tets = driver.explicit.iter().filter(|&&e| e).count();
+    driver.extrapolated = driver
+        .explicit
+        .iter()
+        .any(|&e| e)
         .then(|| path.committed.clone());
-
-    loop {
-        let fed_done = loading
-            .fed_stop
-            .is_some_and(|s| path.rows.last().is_some_and(|r: &CurveRow| r.fed >= s));
-        if path.lambda >= loading.u_final - done_eps || fed_done {
-            break;
-        }
+    while !driver.done(&path) {
         if let Some(max_steps) = loading.max_steps.filter(|&m| path.rows.len() >= m) {
             let u_imposed = path.lambda;
             let h = path.next_step;
             return Err(SolveError::StepLimit {
                 max_steps,
                 u_imposed,
-                partial: partial(path, h, &ws.lin, &wall),
+                partial: driver.partial(path, h),
             });
         }
-        let step = path.rows.len() + 1;
-        let h_try = path.next_step.min(loading.u_final - path.lambda);
-        let target = path.lambda + h_try;
-        ws.wall = WallTimes::default();
-        let t_step = Instant::now();
-        let mut u_trial = path.u.clone();
-        if settings.predictor == Predictor::Extrapolate && path.last_step > 0.0 {
-            let s = h_try / path.last_step;
-            u_trial
-                .iter_mut()
-                .zip(&path.last_increment)
-                .for_each(|(v, d)| *v += s * d);
-        }
-        dirichlet.apply(target, &mut u_trial);
-        if let Some(ex) = extrapolated.as_mut() {
-            ex.clone_from(&path.committed);
-            let ratio = if path.last_step > 0.0 {
-                h_try / path.last_step
-            } else {
-                0.0
-            };
-            for (state, law) in ex.bulk.iter_mut().zip(&laws.tets) {
-                *state = law.extrapolate(state, ratio);
+        path = match driver.step(path, observer)? {
+            Outcome::Continue(path) => path,
+            Outcome::End(ending, path) => {
+                let h = path.next_step;
+                let mut result = *driver.partial(path, h);
+                result.ending = ending;
+                return Ok(result);
             }
-        }
-        let step_start = extrapolated.as_ref().unwrap_or(&path.committed);
-        let attempt = ws.newton(step_start, &mut u_trial, h_try);
-        let mut step_wall = ws.wall;
-        step_wall.total = t_step.elapsed().as_secs_f64();
-        wall.add(&step_wall);
-        let summary = &mut path.summary;
-        summary.total_iterations += attempt.iterations;
-        summary.factorisations = ws.lin.factorisations;
-        summary.pcg_iterations = ws.lin.pcg_iterations;
-        summary.krylov_iterations = ws.lin.krylov_iterations;
-        match attempt.failure {
-            None => {
-                summary.force_only_steps += usize::from(attempt.force_only);
-                path.last_increment.clear();
-                path.last_increment
-                    .extend(u_trial.iter().zip(&path.u).map(|(a, b)| a - b));
-                path.last_step = h_try;
-                path.u = u_trial;
-                std::mem::swap(&mut path.committed, &mut ws.trial);
-                path.lambda = target;
-                let (force, fed, bond) = measurement.eval(&path.u, &ws.f_int);
-                let row = CurveRow {
-                    step,
-                    u_imposed: path.lambda,
-                    force,
-                    fed,
-                    bond_stress: bond,
-                    iterations: attempt.iterations,
-                };
-                path.rows.push(row);
-                let summary = &mut path.summary;
-                summary.steps = path.rows.len();
-                if bond > summary.peak_bond_stress || path.rows.len() == 1 {
-                    summary.peak_bond_stress = bond;
-                    summary.fed_at_peak = fed;
-                }
-                summary.final_fed = fed;
-                let mut h = if attempt.iterations <= loading.easy_iterations {
-                    (h_try * loading.growth)
-                        .min(loading.max_step)
-                        .max(path.next_step)
-                } else {
-                    h_try
-                };
-                let impl_ex_residual = match extrapolated.as_mut() {
-                    Some(scratch) => {
-                        let t = Instant::now();
-                        let e = implicit_residual(
-                            &system,
-                            laws,
-                            &path.committed,
-                            &path.u,
-                            scratch,
-                            &mut ws.trial,
-                            &mut ws.f_int,
-                        )?;
-                        let spent = t.elapsed().as_secs_f64();
-                        step_wall.constitutive += spent;
-                        wall.constitutive += spent;
-                        summary.impl_ex_max_residual = summary.impl_ex_max_residual.max(e);
-                        // A linear extrapolation's error grows like h² on a
-                        // smooth history; near R1's adhesion peak it was
-                        // closer to h (docs/solver.md), and the steps then
-                        // shrink over several steps instead of one.
-                        if e > settings.impl_ex_tolerance {
-                            let shrink = (settings.impl_ex_tolerance / e).sqrt() * 0.9;
-                            h = (h_try * shrink.max(loading.cutback))
-                                .max(loading.min_step)
-                                .min(h);
-                        }
-                        Some(e)
-                    }
-                    None => None,
-                };
-                path.next_step = h;
-                finish(&mut path.summary, &wall);
-                let cp = || make_cp(&path, h, &ws.lin);
-                let view = CommittedView {
-                    model,
-                    laws,
-                    checkpoint: &cp,
-                    u: &path.u,
-                    states: &path.committed,
-                };
-                observer.step_converged(
-                    &StepReport {
-                        row,
-                        step_size: h_try,
-                        times: step_wall,
-                        residual_history: attempt.history.clone(),
-                        force_only: attempt.force_only,
-                        impl_ex_residual,
-                    },
-                    &view,
-                );
-                ws.trial.clone_from(&path.committed);
-            }
-            Some(reason) => {
-                summary.cutbacks += 1;
-                let next = h_try * loading.cutback;
-                ws.trial.clone_from(&path.committed);
-                observer.cutback(&Cutback {
-                    step,
-                    u_imposed: target,
-                    failed_step_size: h_try,
-                    next_step_size: next,
-                    reason: reason.clone(),
-                    residual_history: attempt.history.clone(),
-                });
-                if h_try <= loading.min_step * (1.0 + 1e-12) {
-                    return Err(SolveError::Stalled {
-                        step,
-                        u_imposed: target,
-                        step_size: h_try,
-                        residual_history: attempt.history,
-                        cause: Box::new(reason),
-                        partial: partial(path, h_try, &ws.lin, &wall),
-                    });
-                }
-                path.next_step = next.max(loading.min_step);
-            }
-        }
+        };
     }
     let h = path.next_step;
-    let result = partial(path, h, &ws.lin, &wall);
-    Ok(*result)
+    Ok(*driver.partial(path, h))
 }
 
-/// The run's state from a checkpoint taken on the same model; restores the
-/// kept preconditioner so that the resumed iterates equal the
-/// uninterrupted run's.
-fn resume(
-    ws: &mut Workspace<'_>,
-    model: &Model,
-    cp: Checkpoint,
-    n_total: usize,
-    wall: &mut WallTimes,
-) -> Result<Path, SolveError> {
-    cp.check_matches(model, n_total)
-        .map_err(SolveError::Checkpoint)?;
-    let lin = &mut ws.lin;
-    if let Some(p) = cp.preconditioner {
-        // Rebuild the uninterrupted run's factor from its values (a
-        // restore, not counted among the run's factorisations).
-        if p.values.len() == lin.preconditioner.len() {
-            let t = Instant::now();
-            lin.chol.factorize(&p.values)?;
-            wall.factorisation += t.elapsed().as_secs_f64();
-            lin.preconditioner = p.values;
-            lin.refactor = p.refactor;
+/// What a step leaves: the path to go on with, or the end of the run at a
+/// diagnosed limit.
+enum Outcome {
+    Continue(Path),
+    End(Ending, Path),
+}
+
+impl<'a> Driver<'a> {
+    fn new(
+        problem: Problem<'a>,
+        loading: &'a Loading,
+        settings: &'a SolverSettings,
+        system: &'a System,
+        started: Instant,
+    ) -> Result<Self, SolveError> {
+        let mut wall = WallTimes::default();
+        let lin = LinearState::new(system, settings, &mut wall)?;
+        let n_total = system.dofs().n_total();
+        let ws = Workspace {
+            system,
+            laws: problem.laws,
+            settings,
+            trial: States::default(),
+            f_int: vec![0.0; n_total],
+            lower: vec![0.0; system.nnz()],
+            upper: if settings.tangent == TangentKind::Consistent {
+                vec![0.0; system.nnz()]
+            } else {
+                Vec::new()
+            },
+            load: None,
+            constraint_row: Vec::new(),
+            lin,
+            force_floor: 0.0,
+            wall: WallTimes::default(),
+        };
+        Ok(Self {
+            rates: problem.dirichlet.load_rates(),
+            fed: Quantity::new(
+                problem.measurement.relative_weights(),
+                system.dofs(),
+                problem.dirichlet,
+            ),
+            problem,
+            loading,
+            settings,
+            ws,
+            explicit: explicit_tets(problem.model, settings),
+            extrapolated: None,
+            wall,
+            previous_wall: WallTimes::default(),
+            started,
+        })
+    }
+
+    fn start(&self) -> Path {
+        Path {
+            u: vec![0.0; self.ws.system.dofs().n_total()],
+            committed: States::initial(self.problem.model),
+            rows: Vec::new(),
+            summary: Summary {
+                dofs: self.ws.system.dofs().n_free(),
+                ..Summary::default()
+            },
+            lambda: 0.0,
+            mode: ControlMode::Displacement,
+            next_step: self.loading.initial_step,
+            last_increment: Vec::new(),
+            last_lambda_increment: 0.0,
+            load: 0.0,
+            last_load_increment: 0.0,
+            steel_yielding: false,
         }
     }
-    let (last_increment, last_step) = if cp.last_increment.len() == n_total {
-        (cp.last_increment, cp.last_step)
-    } else {
-        (Vec::new(), 0.0)
-    };
-    lin.factorisations = cp.summary.factorisations;
-    lin.pcg_iterations = cp.summary.pcg_iterations;
-    lin.krylov_iterations = cp.summary.krylov_iterations;
-    Ok(Path {
-        u: cp.u,
-        committed: cp.states,
-        rows: cp.rows,
-        summary: cp.summary,
-        lambda: cp.u_imposed,
-        next_step: cp.next_step,
-        last_increment,
-        last_step,
-    })
+
+    /// The run's state from a checkpoint taken on the same model; restores
+    /// the kept preconditioner so that the resumed iterates equal the
+    /// uninterrupted run's.
+    fn resume(&mut self, cp: Checkpoint) -> Result<Path, SolveError> {
+        let n_total = self.ws.system.dofs().n_total();
+        cp.check_matches(self.problem.model, n_total)
+            .map_err(SolveError::Checkpoint)?;
+        let lin = &mut self.ws.lin;
+        if let Some(p) = cp.preconditioner {
+            // Rebuild the uninterrupted run's factor from its values (a
+            // restore, not counted among the run's factorisations).
+            if p.values.len() == lin.preconditioner.len() {
+                let t = Instant::now();
+                lin.chol.factorize(&p.values)?;
+                self.wall.factorisation += t.elapsed().as_secs_f64();
+                lin.preconditioner = p.values;
+                lin.refactor = p.refactor;
+            }
+        }
+        let (last_increment, last_lambda_increment) = if cp.last_increment.len() == n_total {
+            (cp.last_increment, cp.last_step)
+        } else {
+            (Vec::new(), 0.0)
+        };
+        lin.factorisations = cp.summary.factorisations;
+        lin.pcg_iterations = cp.summary.pcg_iterations;
+        lin.krylov_iterations = cp.summary.krylov_iterations;
+        Ok(Path {
+            u: cp.u,
+            committed: cp.states,
+            rows: cp.rows,
+            summary: cp.summary,
+            lambda: cp.u_imposed,
+            mode: cp.control_mode,
+            next_step: cp.next_step,
+            last_increment,
+            last_lambda_increment,
+            load: cp.generalised_load,
+            last_load_increment: cp.last_load_increment,
+            steel_yielding: false,
+        })
+    }
+
+    /// The end of the loading: λ at `u_final`, or the FED at `fed_stop`.
+    fn done(&self, path: &Path) -> bool {
+        let loading = self.loading;
+        let fed_done = loading
+            .fed_stop
+            .is_some_and(|s| path.rows.last().is_some_and(|r| r.fed >= s * (1.0 - 1e-9)));
+        path.lambda >= loading.u_final - 1e-9 * loading.u_final || fed_done
+    }
+
+    /// FED increment of the last converged step, m.
+    fn last_fed_increment(&self, path: &Path) -> f64 {
+        if path.last_increment.is_empty() {
+            0.0
+        } else {
+            self.fed.value(&path.last_increment)
+        }
+    }
+
+    /// What the next step prescribes and how far. Indirect control starts
+    /// after the first converged step, when both λ and the FED grew in it
+    /// (their ratio converts the step size), and hands the step to
+    /// displacement control where the extrapolated λ would pass `u_final`.
+    fn plan(&self, path: &mut Path) -> Plan {
+        let loading = self.loading;
+        let dl = path.last_lambda_increment;
+        let df = self.last_fed_increment(path);
+        if path.mode == ControlMode::Displacement
+            && self.settings.path_following == PathFollowing::Fed
+            && dl > 0.0
+            && df > 0.0
+        {
+            path.mode = ControlMode::FreeEnd;
+            path.next_step *= df / dl;
+        }
+        let by_lambda = |h: f64| {
+            let size = h.min(loading.u_final - path.lambda);
+            Plan {
+                mode: ControlMode::Displacement,
+                size,
+                target: path.lambda + size,
+                scale: if dl > 0.0 { size / dl } else { 0.0 },
+            }
+        };
+        match path.mode {
+            ControlMode::Displacement => by_lambda(path.next_step),
+            ControlMode::Energy => {
+                let (released, _) = path.last_energies();
+                let size = path.next_step;
+                let scale = if released > 0.0 { size / released } else { 0.0 };
+                let fed = self.fed.value(&path.u);
+                if let Some(stop) = loading.fed_stop {
+                    if fed + scale * df >= stop {
+                        return self.by_fed(path, stop - fed, df);
+                    }
+                }
+                if path.lambda + scale * dl >= loading.u_final {
+                    return by_lambda(loading.u_final - path.lambda);
+                }
+                Plan {
+                    mode: ControlMode::Energy,
+                    size,
+                    target: size,
+                    scale,
+                }
+            }
+            ControlMode::FreeEnd => {
+                let plan = self.by_fed(path, path.next_step, df);
+                if path.lambda + plan.scale * dl >= loading.u_final {
+                    return by_lambda(loading.u_final - path.lambda);
+                }
+                plan
+            }
+        }
+    }
+
+    /// A step prescribing the FED `size` further (at most to `fed_stop`).
+    fn by_fed(&self, path: &Path, size: f64, last_fed_increment: f64) -> Plan {
+        let fed = self.fed.value(&path.u);
+        let mut size = size;
+        if let Some(stop) = self.loading.fed_stop {
+            size = size.min(stop - fed).max(self.loading.min_step);
+        }
+        Plan {
+            mode: ControlMode::FreeEnd,
+            size,
+            target: fed + size,
+            scale: if last_fed_increment > 0.0 {
+                size / last_fed_increment
+            } else {
+                0.0
+            },
+        }
+    }
+
+    /// Attempts one step; on convergence commits it and reports it, on
+    /// failure cuts the next step back. Ends the run at the minimum step.
+    fn step(&mut self, mut path: Path, observer: &mut dyn Observer) -> Result<Outcome, SolveError> {
+        let plan = self.plan(&mut path);
+        self.ws.wall = WallTimes::default();
+        let t_step = Instant::now();
+        self.ws.force_floor = UNLOADED * self.peak_load(&path);
+        // Tets made explicit for this step after an attempt in which they
+        // switched between damage growing and not (see `retry_explicit`).
+        let mut flipped: Vec<usize> = Vec::new();
+        let mut retries = 0;
+        let (attempt, u_trial, lambda) = loop {
+            self.prepare_start(&path, &plan, &flipped);
+            let (mut u_trial, mut control) = Self::predict(
+                (&self.fed, &self.rates),
+                &self.problem,
+                self.settings,
+                (&path, &plan),
+            );
+            let step_start = self.extrapolated.as_ref().unwrap_or(&path.committed);
+            if plan.mode == ControlMode::Displacement && path.last_increment.is_empty() {
+                let mut u = path.u.clone();
+                if self.ws.tangent_predictor(step_start, &mut u, plan.size) {
+                    self.problem.dirichlet.apply(plan.target, &mut u);
+                    u_trial = u;
+                }
+            }
+            let attempt = self
+                .ws
+                .newton(step_start, &mut u_trial, plan.size, &mut control);
+            let lambda = control.lambda().unwrap_or(plan.target);
+            path.summary.total_iterations += attempt.iterations;
+            if attempt.failure.is_some() && retries < RETRIES {
+                let before = flipped.len();
+                flipped.extend(attempt.flipping.iter().filter(|&&i| !self.explicit[i]));
+                flipped.sort_unstable();
+                flipped.dedup();
+                if flipped.len() > before {
+                    retries += 1;
+                    path.summary.explicit_retries += 1;
+                    self.ws.trial.clone_from(&path.committed);
+                    observer.cutback(&Cutback {
+                        step: path.rows.len() + 1,
+                        u_imposed: lambda,
+                        failed_step_size: plan.size,
+                        next_step_size: plan.size,
+                        reason: attempt.failure.clone().expect("a failed attempt"),
+                        residual_history: attempt.history.clone(),
+                    });
+                    continue;
+                }
+            }
+            break (attempt, u_trial, lambda);
+        };
+        let mut step_wall = self.ws.wall;
+        step_wall.total = t_step.elapsed().as_secs_f64();
+        self.wall.add(&step_wall);
+        let summary = &mut path.summary;
+        summary.factorisations = self.ws.lin.factorisations;
+        summary.pcg_iterations = self.ws.lin.pcg_iterations;
+        summary.krylov_iterations = self.ws.lin.krylov_iterations;
+        if attempt.failure.is_none() {
+            let path = self.commit(path, &plan, (u_trial, lambda), attempt, step_wall, observer)?;
+            Ok(
+                match self.yield_plateau(&path).or_else(|| self.lost_load(&path)) {
+                    Some(ending) => Outcome::End(ending, path),
+                    None => Outcome::Continue(path),
+                },
+            )
+        } else {
+            self.cut_back(path, &plan, lambda, attempt, observer)
+        }
+    }
+
+    /// The first iterate of a step and the control that holds it: the
+    /// last converged state plus the planned multiple of the last
+    /// increment, with the Dirichlet values of the predicted λ.
+    fn predict<'b>(
+        (fed, rates): (&'b Quantity, &'b [(usize, f64)]),
+        problem: &Problem<'b>,
+        settings: &SolverSettings,
+        (path, plan): (&Path, &Plan),
+    ) -> (Vec<f64>, Control<'b>) {
+        let mut u = path.u.clone();
+        if settings.predictor == Predictor::Extrapolate && plan.scale > 0.0 {
+            u.iter_mut()
+                .zip(&path.last_increment)
+                .for_each(|(v, d)| *v += plan.scale * d);
+        }
+        let dirichlet = problem.dirichlet;
+        if plan.mode == ControlMode::Displacement {
+            dirichlet.apply(plan.target, &mut u);
+            return (u, Control::Displacement);
+        }
+        let lambda = path.lambda + plan.scale * path.last_lambda_increment;
+        dirichlet.apply(lambda, &mut u);
+        let constraint = match plan.mode {
+            ControlMode::FreeEnd => Constraint::Quantity {
+                quantity: fed,
+                target: plan.target,
+            },
+            _ => Constraint::Energy {
+                rates,
+                force0: path.load,
+                lambda0: path.lambda,
+                target: plan.target,
+            },
+        };
+        let control = Control::Indirect(Indirect {
+            constraint,
+            dirichlet,
+            lambda,
+            increment: 0.0,
+        });
+        (u, control)
+    }
+
+    /// The states a step starts from: the committed ones, with the damage
+    /// of the explicit tets (and of `flipped`) extrapolated over the step;
+    /// and the load derivatives' buffer under indirect control.
+    fn prepare_start(&mut self, path: &Path, plan: &Plan, flipped: &[usize]) {
+        self.ws.load = (plan.mode != ControlMode::Displacement)
+            .then(|| LoadDerivatives::new(self.ws.system.dofs().n_free()));
+        let any = !flipped.is_empty() || self.explicit.iter().any(|&e| e);
+        match (any, self.extrapolated.is_some()) {
+            (true, false) => self.extrapolated = Some(path.committed.clone()),
+            (false, true) => self.extrapolated = None,
+            _ => {}
+        }
+        if let Some(ex) = self.extrapolated.as_mut() {
+            ex.clone_from(&path.committed);
+            let laws = &self.problem.laws.tets;
+            let explicit = &self.explicit;
+            let chosen = (0..ex.bulk.len())
+                .filter(|&i| explicit[i])
+                .chain(flipped.iter().copied());
+            for i in chosen {
+                ex.bulk[i] = laws[i].extrapolate(&ex.bulk[i], plan.scale);
+            }
+        }
+    }
+
+    /// Makes the converged attempt the path's new state, chooses the next
+    /// step size and reports the step.
+    fn commit(
+        &mut self,
+        mut path: Path,
+        plan: &Plan,
+        (u, lambda): (Vec<f64>, f64),
+        attempt: Attempt,
+        mut step_wall: WallTimes,
+        observer: &mut dyn Observer,
+    ) -> Result<Path, SolveError> {
+        let loading = self.loading;
+        path.summary.force_only_steps += usize::from(attempt.force_only);
+        path.last_increment.clear();
+        path.last_increment
+            .extend(u.iter().zip(&path.u).map(|(a, b)| a - b));
+        // The planned size itself under displacement control: the sum and
+        // difference of λ values would round it.
+        path.last_lambda_increment = match plan.mode {
+            ControlMode::Displacement => plan.size,
+            _ => lambda - path.lambda,
+        };
+        let load = generalised_load(&self.rates, &self.ws.f_int);
+        path.last_load_increment = load - path.load;
+        path.load = load;
+        path.u = u;
+        std::mem::swap(&mut path.committed, &mut self.ws.trial);
+        path.steel_yielding =
+            RegimeChanges::between(&self.ws.trial, &path.committed).steel_yield > 0;
+        // A tet made explicit for this step only (a retry) goes back to the
+        // implicit integration, keeping the damage its stress used where
+        // that is the larger: the state then matches the equilibrium just
+        // found, and the energy it released stays dissipated.
+        for (s, &always) in path.committed.bulk.iter_mut().zip(&self.explicit) {
+            if !always {
+                if let Some(used) = s.explicit_damage.take() {
+                    s.damage = s.damage.max(used);
+                }
+            }
+        }
+        path.lambda = lambda;
+        let (force, fed, bond) = self.problem.measurement.eval(&path.u, &self.ws.f_int);
+        let row = CurveRow {
+            step: path.rows.len() + 1,
+            u_imposed: path.lambda,
+            force,
+            fed,
+            bond_stress: bond,
+            iterations: attempt.iterations,
+        };
+        path.rows.push(row);
+        let summary = &mut path.summary;
+        summary.steps = path.rows.len();
+        if bond > summary.peak_bond_stress || path.rows.len() == 1 {
+            summary.peak_bond_stress = bond;
+            summary.fed_at_peak = fed;
+        }
+        summary.final_fed = fed;
+        if plan.mode != path.mode {
+            // A displacement-controlled last step of an indirect run: the
+            // next one (if any) keeps the run's mode and size.
+        } else if attempt.iterations <= loading.easy_iterations {
+            path.next_step = (plan.size * loading.growth)
+                .min(loading.max_step)
+                .max(path.next_step);
+        } else {
+            path.next_step = plan.size;
+        }
+        if self.settings.path_following == PathFollowing::Energy
+            || (self.settings.path_following == PathFollowing::Auto
+                && path.mode == ControlMode::Energy)
+        {
+            self.switch_after(&mut path, plan);
+        }
+        let impl_ex_residual = match self.extrapolated.as_mut() {
+            Some(scratch) => {
+                let t = Instant::now();
+                let e = implicit_residual(&mut self.ws, &path.committed, &path.u, scratch)?;
+                let spent = t.elapsed().as_secs_f64();
+                step_wall.constitutive += spent;
+                self.wall.constitutive += spent;
+                let summary = &mut path.summary;
+                summary.impl_ex_max_residual = summary.impl_ex_max_residual.max(e);
+                // A linear extrapolation's error grows like h² on a
+                // smooth history; near R1's adhesion peak it was closer to
+                // h (docs/solver.md), and the steps then shrink over
+                // several steps instead of one.
+                if e > self.settings.impl_ex_tolerance {
+                    let shrink = (self.settings.impl_ex_tolerance / e).sqrt() * 0.9;
+                    path.next_step = (plan.size * shrink.max(loading.cutback))
+                        .max(loading.min_step)
+                        .min(path.next_step);
+                }
+                Some(e)
+            }
+            None => None,
+        };
+        self.finish(&mut path.summary);
+        let h = path.next_step;
+        let cp = || self.checkpoint(&path, h);
+        let view = CommittedView {
+            model: self.problem.model,
+            laws: self.problem.laws,
+            checkpoint: &cp,
+            u: &path.u,
+            states: &path.committed,
+        };
+        observer.step_converged(
+            &StepReport {
+                row,
+                step_size: plan.size,
+                times: step_wall,
+                residual_history: attempt.history,
+                force_only: attempt.force_only,
+                impl_ex_residual,
+            },
+            &view,
+        );
+        self.ws.trial.clone_from(&path.committed);
+        Ok(path)
+    }
+
+    /// Reports the failed attempt and halves (by `loading.cutback`) the
+    /// next try; a failure at the minimum step ends the run.
+    fn cut_back(
+        &mut self,
+        mut path: Path,
+        plan: &Plan,
+        lambda: f64,
+        attempt: Attempt,
+        observer: &mut dyn Observer,
+    ) -> Result<Outcome, SolveError> {
+        let loading = self.loading;
+        let reason = attempt.failure.expect("a failed attempt");
+        path.summary.cutbacks += 1;
+        let next = plan.size * loading.cutback;
+        self.ws.trial.clone_from(&path.committed);
+        let step = path.rows.len() + 1;
+        observer.cutback(&Cutback {
+            step,
+            u_imposed: lambda,
+            failed_step_size: plan.size,
+            next_step_size: next,
+            reason: reason.clone(),
+            residual_history: attempt.history.clone(),
+        });
+        let (released, work) = path.last_energies();
+        // `auto` hands over only where displacement control would stop (at
+        // the minimum step), so that every run it carries to the end keeps
+        // its curve; `energy` at the first failure.
+        let hand_over = match self.settings.path_following {
+            PathFollowing::Energy => true,
+            PathFollowing::Auto => plan.size <= loading.min_step * (1.0 + 1e-12),
+            _ => false,
+        };
+        if hand_over
+            && plan.mode == ControlMode::Displacement
+            && path.mode == ControlMode::Displacement
+            && released > STARTS_DISSIPATING * work.abs()
+            && !self.unloaded(&path)
+        {
+            // Displacement control found no equilibrium just after a step
+            // that dissipated: a snap-back, which dissipation control
+            // follows. The step releases what the last one did. (After an
+            // elastic step the energy constraint would not respond to λ:
+            // the step is cut back first, nearer to where dissipation
+            // starts.)
+            path.mode = ControlMode::Energy;
+            path.next_step = released.max(self.energy_floor(&path));
+            return Ok(Outcome::Continue(path));
+        }
+        let min_step = match plan.mode {
+            ControlMode::Energy => self.energy_floor(&path),
+            _ => loading.min_step,
+        };
+        if plan.size <= min_step * (1.0 + 1e-12) {
+            if let Some(limit) = self.limit_load(&path, &reason) {
+                return Ok(Outcome::End(limit, path));
+            }
+            return Err(SolveError::Stalled {
+                step,
+                u_imposed: lambda,
+                step_size: plan.size,
+                residual_history: attempt.history,
+                cause: Box::new(reason),
+                partial: self.partial(path, plan.size),
+            });
+        }
+        if plan.mode == path.mode {
+            path.next_step = next.max(min_step);
+        }
+        Ok(Outcome::Continue(path))
+    }
+
+    /// The end of the run at the loaded member's limit load: the step
+    /// failed with the steel yielding and the last converged force at
+    /// least [`LIMIT_SHARE`] of the yield force (a perfectly plastic
+    /// section has no stiffness left; beyond it no quasi-static state
+    /// carries more).
+    fn limit_load(&self, path: &Path, reason: &StepFailure) -> Option<Ending> {
+        let yield_force = self.problem.yield_force?;
+        let force = path.rows.last()?.force;
+        let yielding = reason.regimes().is_none_or(|r| r.steel_yield > 0);
+        (yielding && force.abs() >= LIMIT_SHARE * yield_force)
+            .then_some(Ending::LimitLoad { force, yield_force })
+    }
+
+    /// The end of the run on the loaded member's yield plateau: the last
+    /// converged step yielded steel, carries at least [`LIMIT_SHARE`] of
+    /// the yield force, and its force grew by less than [`PLATEAU`] of
+    /// itself. The bar then only stretches plastically beyond the bearing
+    /// face; the bond sees no more load, so further steps carry no
+    /// information.
+    fn yield_plateau(&self, path: &Path) -> Option<Ending> {
+        let yield_force = self.problem.yield_force?;
+        let [.., before, last] = path.rows.as_slice() else {
+            return None;
+        };
+        let force = last.force;
+        let flat = (force - before.force).abs() <= PLATEAU * force.abs();
+        (path.steel_yielding && flat && force.abs() >= LIMIT_SHARE * yield_force)
+            .then_some(Ending::LimitLoad { force, yield_force })
+    }
+
+    /// The end of a run whose specimen lost its load: the last converged
+    /// force is below [`UNLOADED`] of the peak, reached at an earlier step.
+    fn lost_load(&self, path: &Path) -> Option<Ending> {
+        let [.., last] = path.rows.as_slice() else {
+            return None;
+        };
+        let peak_force = path.rows.iter().map(|r| r.force.abs()).fold(0.0, f64::max);
+        if peak_force == 0.0 || last.force.abs() > UNLOADED * peak_force {
+            return None;
+        }
+        let broken_concrete_tets = path
+            .committed
+            .bulk
+            .iter()
+            .zip(&self.problem.model.tet_region)
+            .filter(|(s, r)| **r == mesh::Region::Concrete && s.damage > 0.99)
+            .count();
+        Some(Ending::Unloaded {
+            force: last.force,
+            peak_force,
+            broken_concrete_tets,
+        })
+    }
+
+    /// The load has fallen to a negligible share of its largest value: the
+    /// parts slide freely, nothing is left to release, and displacement
+    /// control takes over again.
+    fn unloaded(&self, path: &Path) -> bool {
+        path.load.abs() <= UNLOADED * self.peak_load(path)
+    }
+
+    /// The largest |F| of the converged steps (the model's load, N).
+    fn peak_load(&self, path: &Path) -> f64 {
+        let factor = self.problem.measurement.force_factor;
+        path.rows
+            .iter()
+            .map(|r| (r.force / factor).abs())
+            .fold(0.0, f64::max)
+    }
+
+    /// The smallest energy step: the work of the load over `min_step`, J.
+    fn energy_floor(&self, path: &Path) -> f64 {
+        0.5 * path.load.abs() * self.loading.min_step
+    }
+
+    /// Under dissipation control's policy: a dissipative displacement-
+    /// controlled step hands over to dissipation control (its released
+    /// energy sizes the next step), an elastic dissipation-controlled step
+    /// hands back (its Δλ sizes the next step).
+    fn switch_after(&self, path: &mut Path, plan: &Plan) {
+        let (released, work) = path.last_energies();
+        let ratio = path.next_step / plan.size;
+        match plan.mode {
+            ControlMode::Displacement
+                if path.mode == ControlMode::Displacement
+                    && released > DISSIPATIVE * work.abs()
+                    && !self.unloaded(path) =>
+            {
+                path.mode = ControlMode::Energy;
+                path.next_step = released * ratio;
+            }
+            ControlMode::Energy
+                if path.last_lambda_increment > 0.0
+                    && (released < ELASTIC * work || self.unloaded(path)) =>
+            {
+                path.mode = ControlMode::Displacement;
+                path.next_step = (path.last_lambda_increment * ratio)
+                    .clamp(self.loading.min_step, self.loading.max_step);
+            }
+            _ => {}
+        }
+    }
+
+    /// Adds this invocation's wall times to the run's so far.
+    fn finish(&self, summary: &mut Summary) {
+        let mut w = self.previous_wall;
+        let mut now = self.wall;
+        now.total = self.started.elapsed().as_secs_f64();
+        w.add(&now);
+        summary.wall_time_s = w;
+    }
+
+    fn checkpoint(&self, path: &Path, next_step: f64) -> Checkpoint {
+        let model = self.problem.model;
+        let lin = &self.ws.lin;
+        Checkpoint {
+            n_nodes: model.nodes.len(),
+            n_tets: model.tets.len(),
+            n_interfaces: model.interfaces.len(),
+            u_imposed: path.lambda,
+            next_step,
+            control_mode: path.mode,
+            u: path.u.clone(),
+            states: path.committed.clone(),
+            rows: path.rows.clone(),
+            summary: path.summary.clone(),
+            preconditioner: (self.settings.linear_solver != LinearSolverKind::Cholesky
+                && lin.chol.is_factored())
+            .then(|| PreconditionerState {
+                values: lin.preconditioner.clone(),
+                refactor: lin.refactor,
+            }),
+            last_increment: path.last_increment.clone(),
+            last_step: path.last_lambda_increment,
+            generalised_load: path.load,
+            last_load_increment: path.last_load_increment,
+        }
+    }
+
+    /// The run's result so far, with the state to resume from.
+    fn partial(&self, mut path: Path, next_step: f64) -> Box<RunResult> {
+        self.finish(&mut path.summary);
+        let last = self.checkpoint(&path, next_step);
+        Box::new(RunResult {
+            rows: path.rows,
+            summary: path.summary,
+            last,
+            ending: Ending::Completed,
+        })
+    }
+}
+
+/// The tets a step integrates explicitly (see `Driver::explicit`).
+fn explicit_tets(model: &Model, settings: &SolverSettings) -> Vec<bool> {
+    if settings.concrete_integration == ConcreteIntegration::ImplEx {
+        return vec![true; model.tets.len()];
+    }
+    model
+        .tets
+        .iter()
+        .map(|t| {
+            mesh::build::tet_quality(t.map(|n| model.nodes[n as usize])) < settings.sliver_quality
+        })
+        .collect()
 }
 
 /// IMPL-EX error indicator of a converged step: the residual of the
 /// converged displacement `u` when every concrete point takes the damage
 /// its implicit history reached in the step instead of the extrapolated
 /// one (what an implicit Newton iteration would see there), relative to
-/// the reaction like the force criterion. Overwrites `scratch`, `trial` and
-/// `f_int` (`f_int` is left with the implicit internal forces).
+/// the reaction like the force criterion. Overwrites `scratch` and the
+/// workspace's trial states and internal forces.
 fn implicit_residual(
-    system: &System,
-    laws: &ElementLaws,
+    ws: &mut Workspace<'_>,
     committed: &States,
     u: &[f64],
     scratch: &mut States,
-    trial: &mut States,
-    f_int: &mut [f64],
 ) -> Result<f64, AssemblyError> {
     scratch.clone_from(committed);
     for s in &mut scratch.bulk {
         s.explicit_damage = Some(s.damage);
     }
+    let system: &System = ws.system;
     system.evaluate(
-        laws,
+        ws.laws,
         u,
         scratch,
-        trial,
+        &mut ws.trial,
         Tangents::all(TangentKind::Secant),
-        Outputs::forces(f_int),
+        Outputs::forces(&mut ws.f_int),
     )?;
     let mut r = vec![0.0; system.dofs().n_free()];
-    residual(system.dofs(), f_int, &mut r);
-    let reaction = reaction_norm(system, f_int);
+    residual(system.dofs(), &ws.f_int, &mut r);
+    let reaction = reaction_norm(system, &ws.f_int);
     Ok(norm(&r) / if reaction > 0.0 { reaction } else { 1.0 })
 }

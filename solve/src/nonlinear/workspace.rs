@@ -4,7 +4,9 @@
 
 use super::correction::LinearState;
 use super::report::WallTimes;
-use crate::assembly::{AssemblyError, DofMap, ElementLaws, Outputs, States, System, Tangents};
+use crate::assembly::{
+    AssemblyError, DofMap, ElementLaws, LoadDerivatives, Outputs, States, System, Tangents,
+};
 use crate::spec::solver::SolverSettings;
 
 pub(crate) struct Workspace<'a> {
@@ -20,7 +22,15 @@ pub(crate) struct Workspace<'a> {
     /// Transposed entries of the consistent tangent (see
     /// `assembly::Outputs::upper`); empty for symmetric tangent kinds.
     pub(crate) upper: Vec<f64>,
+    /// Derivatives in λ of the current iterate, under path-following
+    /// control; `None` otherwise.
+    pub(crate) load: Option<LoadDerivatives>,
+    /// Scratch for the constraint's gradient on the free DOFs.
+    pub(crate) constraint_row: Vec<f64>,
     pub(crate) lin: LinearState,
+    /// The smallest force scale of the residual criterion, N (a share of
+    /// the largest load of the run so far).
+    pub(crate) force_floor: f64,
     /// Wall times of the step being attempted.
     pub(crate) wall: WallTimes,
 }
@@ -45,7 +55,7 @@ impl Workspace<'_> {
                 f_int: &mut self.f_int,
                 lower: Some(&mut self.lower),
                 upper,
-                load_column: None,
+                load: self.load.as_mut(),
             },
         )?;
         self.wall.add_eval(&t);

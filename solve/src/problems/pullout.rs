@@ -18,7 +18,9 @@
 //!   σ_mb = F / (π d l_adh) (paper eq. 14, Pa).
 
 use crate::assembly::ElementLaws;
-use crate::nonlinear::{run, Checkpoint, Dirichlet, Measurement, Observer, RunResult, SolveError};
+use crate::nonlinear::{
+    run, Checkpoint, Dirichlet, Measurement, Observer, Problem, RunResult, SolveError,
+};
 use crate::spec::solver::{Loading, SolverSettings};
 use mesh::{Model, Symmetry};
 
@@ -125,6 +127,58 @@ pub fn pullout_conditions(model: &Model) -> Result<(Dirichlet, Measurement), Sol
     Ok((dir, measurement(model)))
 }
 
+/// σ_y × the bar's section over its loaded overhang (whole specimen, N),
+/// when the steel there has a yield limit: the mean section (steel volume
+/// between the bearing face and the loaded end, divided by that length),
+/// which ribs crossing it raise a few per cent above the smallest section;
+/// the nominal π d²/4 when there is no overhang.
+pub fn bar_yield_force(model: &Model, laws: &ElementLaws) -> Option<f64> {
+    let z = |n: &u32| model.nodes[*n as usize][2];
+    let sets = &model.node_sets;
+    let z_end = sets
+        .bar_loaded_end
+        .iter()
+        .map(z)
+        .fold(f64::NEG_INFINITY, f64::max);
+    let z_face = sets
+        .concrete_bearing_face
+        .iter()
+        .map(z)
+        .fold(f64::NEG_INFINITY, f64::max);
+    let mut volume = 0.0;
+    let mut sigma_y: Option<f64> = None;
+    for (i, t) in model.tets.iter().enumerate() {
+        if model.tet_region[i] != mesh::Region::Steel {
+            continue;
+        }
+        let p = t.map(|n| model.nodes[n as usize]);
+        if p.iter().all(|q| q[2] >= z_face - 1e-12) {
+            volume += mesh::build::tet_volume(p).abs();
+            let s = laws.tets[i].yield_stress()?;
+            sigma_y = Some(sigma_y.map_or(s, |m: f64| m.min(s)));
+        }
+    }
+    let length = z_end - z_face;
+    let area = if length > 0.0 && volume > 0.0 {
+        volume / length
+    } else {
+        std::f64::consts::PI * model.bar_diameter * model.bar_diameter
+            / 4.0
+            / model.symmetry.force_factor()
+    };
+    let sigma_y = match sigma_y {
+        Some(s) => s,
+        None => laws
+            .tets
+            .iter()
+            .zip(&model.tet_region)
+            .find(|(_, r)| **r == mesh::Region::Steel)?
+            .0
+            .yield_stress()?,
+    };
+    Some(sigma_y * area * model.symmetry.force_factor())
+}
+
 /// Force on the loaded end (times the symmetry factor), FED and σ_mb.
 fn measurement(model: &Model) -> Measurement {
     let sets = &model.node_sets;
@@ -159,7 +213,12 @@ pub fn solve_pullout(
     observer: &mut dyn Observer,
 ) -> Result<RunResult, SolveError> {
     let (dir, meas) = pullout_conditions(model)?;
-    run(
-        model, laws, &dir, &meas, loading, settings, checkpoint, observer,
-    )
+    let problem = Problem {
+        model,
+        laws,
+        dirichlet: &dir,
+        measurement: &meas,
+        yield_force: bar_yield_force(model, laws),
+    };
+    run(&problem, loading, settings, checkpoint, observer)
 }

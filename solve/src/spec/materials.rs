@@ -35,6 +35,8 @@ pub const DEFAULT_LAMBDA0: f64 = 5e-5;
 pub const DEFAULT_MU: f64 = 0.3;
 /// Calibrated ζ of eq. (22) (§3.3).
 pub const DEFAULT_ZETA: f64 = 8.0;
+/// Default half-width of the FCZM's smoothed contact switch, m (0: sharp).
+pub const DEFAULT_CONTACT_SMOOTHING: f64 = 0.0;
 
 /// δ_s from eq. (29): 1 − 0.3889e-6 f_t, f_t the interface strength in Pa.
 pub fn delta_s_eq29(ft: f64) -> f64 {
@@ -116,6 +118,7 @@ pub struct RawInterface {
     pub mu: Option<RawQuantity>,
     pub zeta: Option<RawQuantity>,
     pub gamma: Option<RawQuantity>,
+    pub contact_smoothing: Option<RawQuantity>,
     pub xi: Option<RawQuantity>,
     #[serde(rename = "Kn")]
     pub kn: Option<RawQuantity>,
@@ -475,6 +478,7 @@ pub fn resolve_interface(
                     ("mu", raw.mu.is_some()),
                     ("zeta", raw.zeta.is_some()),
                     ("gamma", raw.gamma.is_some()),
+                    ("contact_smoothing", raw.contact_smoothing.is_some()),
                 ])?;
                 AnyInterfaceLaw::Tvergaard(Tvergaard {
                     tensile_strength: ft,
@@ -496,6 +500,15 @@ pub fn resolve_interface(
                     .get(&raw.gamma, "gamma", Dim::Stress)?
                     .unwrap_or(DEFAULT_GAMMA);
                 let gamma = k.check("gamma", gamma, gamma < 0.0, "< 0 (a compressive stress)")?;
+                let contact_smoothing = k
+                    .get(&raw.contact_smoothing, "contact_smoothing", Dim::Length)?
+                    .unwrap_or(DEFAULT_CONTACT_SMOOTHING);
+                let contact_smoothing = k.check(
+                    "contact_smoothing",
+                    contact_smoothing,
+                    (0.0..lambda0).contains(&contact_smoothing),
+                    "in [0, lambda0)",
+                )?;
                 AnyInterfaceLaw::Fczm(Fczm {
                     tensile_strength: ft,
                     fracture_energy: gf,
@@ -505,6 +518,7 @@ pub fn resolve_interface(
                     zeta,
                     gamma,
                     min_damage: 0.0,
+                    contact_smoothing,
                 })
             }
         }
@@ -516,6 +530,7 @@ pub fn resolve_interface(
                 ("mu", raw.mu.is_some()),
                 ("zeta", raw.zeta.is_some()),
                 ("gamma", raw.gamma.is_some()),
+                ("contact_smoothing", raw.contact_smoothing.is_some()),
                 ("xi", raw.xi.is_some()),
             ])?;
             let kn = k.positive("Kn", k.req(&raw.kn, "Kn", Dim::StiffnessPerArea)?)?;
@@ -558,6 +573,7 @@ pub fn resolve_interface(
                 ("mu", raw.mu.is_some()),
                 ("zeta", raw.zeta.is_some()),
                 ("gamma", raw.gamma.is_some()),
+                ("contact_smoothing", raw.contact_smoothing.is_some()),
                 ("xi", raw.xi.is_some()),
                 ("C", raw.cohesion.is_some()),
                 ("phi", raw.phi.is_some()),

@@ -196,6 +196,8 @@ pub struct RawSolver {
     pub stagnation_acceptance: Option<f64>,
     pub concrete_integration: Option<ConcreteIntegration>,
     pub impl_ex_tolerance: Option<f64>,
+    pub path_following: Option<PathFollowing>,
+    pub sliver_quality: Option<f64>,
 }
 
 /// How the GMRES tolerance of each Newton correction (the forcing term η)
@@ -243,6 +245,35 @@ pub enum ConcreteIntegration {
     /// First-order in the step size: its curve error is measured against
     /// the implicit one (docs/solver.md).
     ImplEx,
+}
+
+/// What a load step prescribes (docs/solver.md, Path-following).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum PathFollowing {
+    /// Every step prescribes the imposed displacement λ.
+    Off,
+    /// After the first step, each step prescribes the free-end
+    /// displacement (FED) and λ is an unknown (indirect displacement
+    /// control): the path is followed through local snap-backs where λ
+    /// must decrease. Steps are then measured in FED (`loading.*_step`
+    /// apply to it); the last step lands on `loading.fed_stop`.
+    Fed,
+    /// Displacement control while the steps are elastic; a step that
+    /// dissipates (its released energy ½(F_0 λ − F λ_0) above a tenth of
+    /// its external work), or that displacement control cannot converge,
+    /// hands over to dissipation control: each step prescribes the energy
+    /// it releases and λ is an unknown, which follows local and global
+    /// snap-backs. Back to displacement control when the steps turn
+    /// elastic again.
+    Energy,
+    /// Displacement control until it fails at the minimum step after a
+    /// step that dissipated (a snap-back: no equilibrium at a larger λ);
+    /// from there dissipation control as in `energy`, back to displacement
+    /// control when the steps turn elastic. Runs that displacement control
+    /// carries to the end keep their curves.
+    #[default]
+    Auto,
 }
 
 /// First iterate of a load step.
@@ -309,6 +340,26 @@ pub struct SolverSettings {
         skip_serializing_if = "is_default_impl_ex_tolerance"
     )]
     pub impl_ex_tolerance: f64,
+    /// Which quantity a step prescribes after the first one. Left out of
+    /// the serialised form at its default.
+    #[serde(default, skip_serializing_if = "is_auto")]
+    pub path_following: PathFollowing,
+    /// Tets whose quality (3 r_in / R_circ, 1 for the regular tet) is below
+    /// this take their damage from an extrapolation of their history
+    /// (IMPL-EX) instead of the step's own: a degenerate tet's strain
+    /// swings with displacements far below the tolerance, and its damage
+    /// then switches on and off between Newton iterates (docs/solver.md,
+    /// "Law switches"). 0 disables; left out of the serialised form then.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub sliver_quality: f64,
+}
+
+fn is_zero(v: &f64) -> bool {
+    *v == 0.0
+}
+
+fn is_auto(p: &PathFollowing) -> bool {
+    *p == PathFollowing::Auto
 }
 
 fn is_implicit(c: &ConcreteIntegration) -> bool {
@@ -343,9 +394,11 @@ impl Default for SolverSettings {
             forcing: Forcing::EisenstatWalker,
             predictor: Predictor::Extrapolate,
             preconditioner_precision: Precision::Single,
-            stagnation_acceptance: 2.0,
+            stagnation_acceptance: 1.0,
             concrete_integration: ConcreteIntegration::Implicit,
             impl_ex_tolerance: DEFAULT_IMPL_EX_TOLERANCE,
+            path_following: PathFollowing::Auto,
+            sliver_quality: 0.0,
         }
     }
 }
@@ -442,6 +495,19 @@ impl RawSolver {
                         key: "solver.impl_ex_tolerance".into(),
                         value: v,
                         bound: "must be > 0",
+                    });
+                }
+            },
+            path_following: self.path_following.unwrap_or(d.path_following),
+            sliver_quality: {
+                let v = self.sliver_quality.unwrap_or(d.sliver_quality);
+                if (0.0..1.0).contains(&v) {
+                    v
+                } else {
+                    return Err(SolverSpecError::OutOfRange {
+                        key: "solver.sliver_quality".into(),
+                        value: v,
+                        bound: "must be in [0, 1)",
                     });
                 }
             },
