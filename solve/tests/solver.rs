@@ -1252,9 +1252,15 @@ fn dissipation_control_follows_a_snap_back() {
     let mut trace = Trace(Vec::new());
     let res = solve_pullout(&m, &laws, &loading, &settings, None, &mut trace);
     let res = res.unwrap();
-    // λ decreased on the way, and the run reached the end of the loading.
+    // λ decreased on the way, and the run followed the path until the
+    // frictionless bar had pulled free: no load left to follow.
     assert!(trace.0.windows(2).any(|w| w[1].0 < w[0].0 - 1e-12));
-    assert!(res.rows.last().unwrap().u_imposed >= loading.u_final * (1.0 - 1e-9));
+    let peak = trace.0.iter().map(|t| t.1).fold(0.0, f64::max);
+    assert!(
+        matches!(res.ending, Ending::Unloaded { force, .. } if force.abs() < 1e-3 * peak),
+        "{:?}",
+        res.ending
+    );
     // A run resumed from a checkpoint taken under dissipation control, on
     // the way back in λ, ends with the same curve (SPEC §6 resume).
     let back = trace.0.windows(2).position(|w| w[1].0 < w[0].0).unwrap() + 2;
