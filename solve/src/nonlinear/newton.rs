@@ -30,9 +30,9 @@ pub(crate) struct Attempt {
     pub(crate) failure: Option<StepFailure>,
     /// Converged on the force criterion only (see `Summary::force_only_steps`).
     pub(crate) force_only: bool,
-    /// Of a failed attempt: the tets whose damage switched between growing
-    /// and not at least twice between iterates (the points Newton could
-    /// not settle).
+    /// Of a failed attempt, or one that ended on its best iterate: the
+    /// tets whose damage switched between growing and not at least twice
+    /// between iterates (the points Newton could not settle).
     pub(crate) flipping: Vec<usize>,
 }
 
@@ -118,10 +118,13 @@ impl Record {
     }
     fn failed_ref(&mut self, iterations: usize, why: StepFailure) -> Attempt {
         let mut attempt = Attempt::failed(iterations, std::mem::take(&mut self.history), why);
-        attempt.flipping = (0..self.flips.len())
-            .filter(|&i| self.flips[i] >= 2)
-            .collect();
+        attempt.flipping = self.flipping();
         attempt
+    }
+    fn flipping(&self) -> Vec<usize> {
+        (0..self.flips.len())
+            .filter(|&i| self.flips[i] >= 2)
+            .collect()
     }
     /// Counts the tets whose damage growth changed since the last iterate.
     fn track(&mut self, start: &States, trial: &States) {
@@ -298,11 +301,9 @@ impl Workspace<'_> {
                     return Some(rec.failed_ref(k, constitutive(false)(e)));
                 }
             }
-            return Some(Attempt::converged(
-                k,
-                std::mem::take(&mut rec.history),
-                true,
-            ));
+            let mut accepted = Attempt::converged(k, std::mem::take(&mut rec.history), true);
+            accepted.flipping = rec.flipping();
+            return Some(accepted);
         }
         if rec.kinds != Tangents::all(TangentKind::Secant) {
             rec.kinds = Tangents::all(TangentKind::Secant);

@@ -91,6 +91,10 @@ pub struct Summary {
     /// (their error is in `impl_ex_max_residual`).
     #[serde(default)]
     pub explicit_retries: usize,
+    /// Newton solves repeated after a retry to settle the damage of its
+    /// explicit tets.
+    #[serde(default)]
+    pub damage_passes: usize,
     pub wall_time_s: WallTimes,
 }
 

@@ -67,6 +67,11 @@ const STARTS_DISSIPATING: f64 = 1e-3;
 /// How often a step is retried with its flip-flopping tets made explicit
 /// before it is cut back.
 const RETRIES: usize = 2;
+/// Most damage passes of a retried step (`settle_explicit_damage`).
+const DAMAGE_PASSES: usize = 20;
+/// A retried tet's damage is settled when the implicit one exceeds the one
+/// its stress used by no more than this.
+const DAMAGE_SETTLED: f64 = 1e-3;
 /// A stall at this share of the yield force or more is a limit load.
 const LIMIT_SHARE: f64 = 0.9;
 /// A step on the yield plateau changes the force by less than this
@@ -449,11 +454,25 @@ impl<'a> Driver<'a> {
                     u_trial = u;
                 }
             }
-            let attempt = self
+            let mut attempt = self
                 .ws
                 .newton(step_start, &mut u_trial, plan.size, &mut control);
-            let lambda = control.lambda().unwrap_or(plan.target);
             path.summary.total_iterations += attempt.iterations;
+            let chattered = attempt.force_only && !attempt.flipping.is_empty();
+            if attempt.failure.is_none() && (chattered || !flipped.is_empty()) {
+                let start = self
+                    .extrapolated
+                    .get_or_insert_with(|| path.committed.clone());
+                attempt = settle_explicit_damage(
+                    &mut self.ws,
+                    start,
+                    &mut flipped,
+                    (&mut u_trial, plan.size, &mut control),
+                    attempt,
+                    &mut path.summary,
+                );
+            }
+            let lambda = control.lambda().unwrap_or(plan.target);
             if attempt.failure.is_some() && retries < RETRIES {
                 let before = flipped.len();
                 flipped.extend(attempt.flipping.iter().filter(|&&i| !self.explicit[i]));
@@ -922,6 +941,124 @@ fn explicit_tets(model: &Model, settings: &SolverSettings) -> Vec<bool> {
             mesh::build::tet_quality(t.map(|n| model.nodes[n as usize])) < settings.sliver_quality
         })
         .collect()
+}
+
+/// Fixed-point passes on the damage of the tets Newton could not settle:
+/// those a retry made explicit, and those that kept switching between
+/// damage growing and not in an attempt that ended on its best iterate.
+/// Each pass gives them the damage their implicit history reached at the
+/// converged displacement (never less than the damage already used) and
+/// solves again, until no such tet's damage grows by more than
+/// `DAMAGE_SETTLED` and no other tet chatters. The damage used only
+/// grows, so the passes cannot cycle as Newton's consistent iterates did;
+/// once settled, the stress of every such tet is the one its committed
+/// state gives, and the converged state is in equilibrium under the
+/// implicit law on the stated criteria. Without the passes the
+/// extrapolated damage of a tet passing its threshold lagged the implicit
+/// one by so much that committed states were out of balance by up to 95 %
+/// of the reaction (docs/solver.md, "Law switches: the explicit retry").
+/// Returns the last attempt: a failed pass fails the step; a step whose
+/// damage has not settled after `DAMAGE_PASSES` is kept, its residual
+/// under the implicit damage reported like IMPL-EX's.
+fn settle_explicit_damage(
+    ws: &mut Workspace<'_>,
+    start: &mut States,
+    flipped: &mut Vec<usize>,
+    (u, step_size, control): (&mut [f64], f64, &mut Control<'_>),
+    mut attempt: Attempt,
+    summary: &mut Summary,
+) -> Attempt {
+    for _ in 0..DAMAGE_PASSES {
+        let mut changed = false;
+        if attempt.force_only {
+            for &i in &attempt.flipping {
+                if start.bulk[i].explicit_damage.is_none() {
+                    let state = &mut start.bulk[i];
+                    state.explicit_damage = Some(state.damage.max(ws.trial.bulk[i].damage));
+                    flipped.push(i);
+                    changed = true;
+                }
+            }
+        }
+        for &i in flipped.iter() {
+            let implicit = ws.trial.bulk[i].damage;
+            let state = &mut start.bulk[i];
+            let used = state.explicit_damage.unwrap_or(state.damage);
+            if implicit > used + DAMAGE_SETTLED {
+                state.explicit_damage = Some(implicit);
+                changed = true;
+            }
+        }
+        if !changed {
+            break;
+        }
+        // Often the converged displacement is already in balance under the
+        // updated damage (it grew by little): one force evaluation then
+        // spares a Newton solve. An attempt that ended on its best iterate
+        // has not met the energy criterion: it gets the solve.
+        let balanced = if attempt.force_only {
+            Ok(false)
+        } else {
+            in_balance(ws, start, u, step_size, control)
+        };
+        match balanced {
+            Ok(true) => break,
+            Ok(false) => {}
+            Err(source) => {
+                let why = StepFailure::Constitutive {
+                    in_line_search: false,
+                    source,
+                };
+                attempt.failure = Some(why);
+                break;
+            }
+        }
+        let pass = ws.newton(start, u, step_size, control);
+        summary.total_iterations += pass.iterations;
+        summary.damage_passes += 1;
+        let iterations = attempt.iterations + pass.iterations;
+        attempt = Attempt { iterations, ..pass };
+        if attempt.failure.is_some() {
+            break;
+        }
+    }
+    flipped.sort_unstable();
+    flipped.dedup();
+    attempt
+}
+
+/// Whether `u` meets the force criterion (and the control's constraint)
+/// from the start states `start`; leaves the trial states and internal
+/// forces of `u` in the workspace.
+fn in_balance(
+    ws: &mut Workspace<'_>,
+    start: &States,
+    u: &[f64],
+    step_size: f64,
+    control: &Control<'_>,
+) -> Result<bool, AssemblyError> {
+    let system: &System = ws.system;
+    system.evaluate(
+        ws.laws,
+        u,
+        start,
+        &mut ws.trial,
+        Tangents::all(TangentKind::Secant),
+        Outputs::forces(&mut ws.f_int),
+    )?;
+    let mut r = vec![0.0; system.dofs().n_free()];
+    ws.residual(&mut r);
+    let reaction = ws.reaction_norm().max(ws.force_floor);
+    let scale = if reaction > 0.0 { reaction } else { 1.0 };
+    let tolerance = ws.settings.residual_tolerance;
+    let held = match control {
+        Control::Displacement => true,
+        Control::Indirect(c) => {
+            c.constraint.residual(u, c.lambda, &ws.f_int).abs()
+                <= c.constraint.tolerance(tolerance, step_size)
+        }
+    };
+    Ok(held && norm(&r) <= tolerance * scale)
 }
 
 /// IMPL-EX error indicator of a converged step: the residual of the
