@@ -15,7 +15,7 @@ use anyhow::Result;
 use geom::spec::NonAdhesive;
 use mesh::{InterfaceZone, Model};
 use solve::assembly::{ElementLaws, SharedBulkLaw, SharedInterfaceLaw};
-use solve::energy::{EnergyRow, EnergyTracker, ZoneRules, ENERGY_TOLERANCE};
+use solve::energy::{EnergyRow, EnergyStart, EnergyTracker, ZoneRules, ENERGY_TOLERANCE};
 use solve::interface_element::{InterfaceKernel, INTERFACE_POINTS};
 use solve::laws::{InterfaceLaw, TangentKind};
 use solve::nonlinear::{
@@ -604,15 +604,12 @@ fn resume_energy<'a>(
     }
     rows.truncate(cp.rows.len());
     let force = cp.rows.last().map_or(0.0, |r| r.force);
-    EnergyTracker::resume(
-        model,
-        laws,
-        rules,
-        &cp.u,
-        &cp.states,
+    let start = EnergyStart {
+        u: &cp.u,
+        states: &cp.states,
         rows,
-        cp.u_imposed,
+        lambda: cp.u_imposed,
         force,
-    )
-    .map_err(|e| e.to_string())
+    };
+    EnergyTracker::resume(model, laws, rules, start).map_err(|e| e.to_string())
 }

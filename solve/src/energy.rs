@@ -203,6 +203,20 @@ pub enum EnergyError {
     },
 }
 
+/// The converged state an energy record continues from.
+pub struct EnergyStart<'s> {
+    /// Displacement, m.
+    pub u: &'s [f64],
+    /// Committed integration-point states.
+    pub states: &'s States,
+    /// Energy rows of the steps before it.
+    pub rows: Vec<EnergyRow>,
+    /// Imposed displacement λ, m.
+    pub lambda: f64,
+    /// Force at λ (whole specimen), N.
+    pub force: f64,
+}
+
 /// Accumulates the energies step by step (see the module doc).
 pub struct EnergyTracker<'a> {
     model: &'a Model,
@@ -227,32 +241,30 @@ impl<'a> EnergyTracker<'a> {
         rules: ZoneRules,
     ) -> Result<Self, EnergyError> {
         let u = vec![0.0; 3 * model.nodes.len()];
-        Self::resume(
-            model,
-            laws,
-            rules,
-            &u,
-            &States::initial(model),
-            Vec::new(),
-            0.0,
-            0.0,
-        )
+        let start = EnergyStart {
+            u: &u,
+            states: &States::initial(model),
+            rows: Vec::new(),
+            lambda: 0.0,
+            force: 0.0,
+        };
+        Self::resume(model, laws, rules, start)
     }
 
-    /// A tracker continuing after a converged state (`u`, `states`) at
-    /// imposed displacement `lambda` (m) and force `force` (N), with the
-    /// energy rows of the steps before it.
-    #[allow(clippy::too_many_arguments)]
+    /// A tracker continuing after the converged state `start`.
     pub fn resume(
         model: &'a Model,
         laws: &'a ElementLaws,
         rules: ZoneRules,
-        u: &[f64],
-        states: &States,
-        rows: Vec<EnergyRow>,
-        lambda: f64,
-        force: f64,
+        start: EnergyStart<'_>,
     ) -> Result<Self, EnergyError> {
+        let EnergyStart {
+            u,
+            states,
+            rows,
+            lambda,
+            force,
+        } = start;
         let tets = model
             .tets
             .iter()
