@@ -15,7 +15,7 @@ use anyhow::Result;
 use geom::spec::NonAdhesive;
 use mesh::{InterfaceZone, Model};
 use solve::assembly::{ElementLaws, SharedBulkLaw, SharedInterfaceLaw};
-use solve::energy::{EnergyRow, EnergyStart, EnergyTracker, ZoneRules, ENERGY_TOLERANCE};
+use solve::energy::{EnergyRow, EnergyStart, EnergyTracker, ENERGY_TOLERANCE};
 use solve::interface_element::{InterfaceKernel, INTERFACE_POINTS};
 use solve::laws::{InterfaceLaw, TangentKind};
 use solve::nonlinear::{
@@ -35,17 +35,6 @@ const CHECKPOINT_COST_RATIO: u32 = 20;
 /// The energy rows up to the last checkpoint (JSON list of [`EnergyRow`]),
 /// in the in-progress directory; removed when the stage completes.
 const ENERGY_RECORD_FILE: &str = "energy_record.json";
-
-/// The reversible-energy rules of the scene's interface zones.
-pub fn zone_rules(scene: &crate::scene::Scene) -> ZoneRules {
-    let materials = &scene.materials;
-    let contact = materials.interface.contact_law();
-    let free = match scene.specimen.non_adhesive {
-        NonAdhesive::Free => None,
-        NonAdhesive::Contact => Some(&contact),
-    };
-    ZoneRules::from_laws(Some(&materials.interface.law), free)
-}
 
 pub fn element_laws(model: &Model, scene: &crate::scene::Scene) -> Result<ElementLaws> {
     let materials = &scene.materials;
@@ -157,14 +146,12 @@ fn mean_traction(
     u: &[f64],
     states: &[solve::laws::InterfaceState],
 ) -> Option<[f64; 3]> {
-    let k = InterfaceKernel::new(e);
-    let ue: [f64; 18] = std::array::from_fn(|i| u[3 * e.nodes[i / 3] as usize + i % 3]);
+    let points = InterfaceKernel::new(e)
+        .tractions(law, u, &states[..INTERFACE_POINTS], TangentKind::Secant)
+        .ok()?;
     let mut t = [0.0; 3];
-    for (p, st) in states.iter().take(INTERFACE_POINTS).enumerate() {
-        let r = law
-            .step(st, &k.local_jump(&ue, p), TangentKind::Secant)
-            .ok()?;
-        for (tc, rc) in t.iter_mut().zip(r.traction.iter()) {
+    for r in &points {
+        for (tc, rc) in t.iter_mut().zip(r.law.traction.iter()) {
             *tc += rc / INTERFACE_POINTS as f64;
         }
     }
@@ -428,10 +415,9 @@ pub fn run(ctx: &Ctx, mesh_dir: &Path, out: &Path) -> Result<()> {
     }
     crate::store::write_atomic(&profile_path, &profile)?;
     let energy_path = out.join(ENERGY_RECORD_FILE);
-    let rules = zone_rules(ctx.scene);
     let energy = match &checkpoint {
-        None => EnergyTracker::new(&model, &laws, rules).map_err(|e| e.to_string()),
-        Some(cp) => resume_energy(&model, &laws, rules, cp, &energy_path),
+        None => EnergyTracker::new(&model, &laws).map_err(|e| e.to_string()),
+        Some(cp) => resume_energy(&model, &laws, cp, &energy_path),
     };
     let mut observer = StageObserver {
         ctx,
@@ -587,7 +573,6 @@ pub fn run(ctx: &Ctx, mesh_dir: &Path, out: &Path) -> Result<()> {
 fn resume_energy<'a>(
     model: &'a Model,
     laws: &'a ElementLaws,
-    rules: ZoneRules,
     cp: &Checkpoint,
     path: &Path,
 ) -> std::result::Result<EnergyTracker<'a>, String> {
@@ -611,5 +596,5 @@ fn resume_energy<'a>(
         lambda: cp.u_imposed,
         force,
     };
-    EnergyTracker::resume(model, laws, rules, start).map_err(|e| e.to_string())
+    EnergyTracker::resume(model, laws, start).map_err(|e| e.to_string())
 }

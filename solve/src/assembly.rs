@@ -227,7 +227,6 @@ pub struct System {
     tet_geom: Vec<TetGeometry>,
     tet_region: Vec<mesh::Region>,
     tet_map: Vec<[u32; TET_LOWER]>,
-    iface_nodes: Vec<[u32; 6]>,
     iface_kernels: Vec<InterfaceKernel>,
     /// Indices of the interface elements that carry a law.
     iface_active: Vec<usize>,
@@ -577,7 +576,6 @@ impl System {
             tet_geom,
             tet_region: model.tet_region.clone(),
             tet_map,
-            iface_nodes: model.interfaces.iter().map(|e| e.nodes).collect(),
             iface_kernels: model.interfaces.iter().map(InterfaceKernel::new).collect(),
             iface_active,
             iface_map,
@@ -734,24 +732,20 @@ impl System {
                     ))
                 })?;
                 let kern = &self.iface_kernels[index];
-                let nodes = &self.iface_nodes[index];
-                let ue: [f64; 18] = std::array::from_fn(|i| u[3 * nodes[i / 3] as usize + i % 3]);
+                let committed =
+                    &committed.interface[INTERFACE_POINTS * index..INTERFACE_POINTS * (index + 1)];
+                let points = kern
+                    .tractions(law.as_ref(), u, committed, iface_kind)
+                    .map_err(|e| AssemblyError::InterfaceLaw {
+                        index,
+                        point: e.point,
+                        source: e.source,
+                    })?;
                 let mut f = [0.0; 18];
                 let mut kpair = [[0.0; 36]; INTERFACE_POINTS];
                 let mut st = [InterfaceState::default(); INTERFACE_POINTS];
-                for p in 0..INTERFACE_POINTS {
-                    let jump = kern.local_jump(&ue, p);
-                    let r = law
-                        .step(
-                            &committed.interface[INTERFACE_POINTS * index + p],
-                            &jump,
-                            iface_kind,
-                        )
-                        .map_err(|source| AssemblyError::InterfaceLaw {
-                            index,
-                            point: p,
-                            source,
-                        })?;
+                for (p, r) in points.iter().enumerate() {
+                    let r = &r.law;
                     if !r.traction.iter().all(|v| v.is_finite()) {
                         return Err(AssemblyError::NonFiniteInterface {
                             index,
@@ -769,20 +763,7 @@ impl System {
                                 what: "tangent",
                             });
                         }
-                        let mut full = [0.0; 324];
-                        kern.add_stiffness(p, &r.tangent, &mut full);
-                        let d: [usize; 6] = std::array::from_fn(|i| {
-                            if i < 3 {
-                                3 * p + i
-                            } else {
-                                3 * (p + 3) + i - 3
-                            }
-                        });
-                        for a in 0..6 {
-                            for b in 0..6 {
-                                kpair[p][6 * a + b] = full[18 * d[a] + d[b]];
-                            }
-                        }
+                        kpair[p] = kern.pair_stiffness(&r.tangent);
                     }
                 }
                 Ok((index, st, (f, kpair)))
@@ -799,7 +780,7 @@ impl System {
         for (slot, (index, st, (f, kpair))) in results.into_iter().enumerate() {
             trial.interface[INTERFACE_POINTS * index..INTERFACE_POINTS * (index + 1)]
                 .copy_from_slice(&st);
-            let nodes = &self.iface_nodes[index];
+            let nodes = &self.iface_kernels[index].nodes;
             for (i, fi) in f.iter().enumerate() {
                 f_int[3 * nodes[i / 3] as usize + i % 3] += fi;
             }

@@ -16,11 +16,12 @@
 //!   so W_ext − W_int is the work of the residual force left on the free
 //!   DOFs by the Newton tolerance, plus any inconsistency between the
 //!   solver's measured force and its element forces.
-//! * **Stored energy** (recoverable on unloading to zero force):
+//! * **Stored energy** (recoverable on unloading to zero force), as each
+//!   law reports it (`BulkLaw::stored_energy`, `InterfaceLaw::stored_energy`):
 //!   - bulk: ½ σ·(ε − ε_p) V. Mazars σ = (1 − D) C ε (no permanent strain):
 //!     ½ ε·C_sec·ε; J2 σ = C (ε − ε_p): ½ (ε − ε_p)·C·(ε − ε_p); elastic ½ σ·ε.
-//!   - interface, by [`ReversibleRule`]: secant cohesive laws (Tvergaard,
-//!     elastic) ½ t·u; the FCZM (paper eq. 15) ½ [P_n K_n u_n² + P_s K_s |u_s|²]
+//!   - interface: secant cohesive laws (Tvergaard, elastic) ½ t·u; the FCZM
+//!     (paper eq. 15) ½ [P_n K_n u_n² + P_s K_s |u_s|²]
 //!     (undamaged part, P = (1 − D)β, (1 − D)α) + D [½ K_n ⟨u_n⟩₋² +
 //!     ½ |τ|²/K_s] (damaged part: the compressive normal spring and the
 //!     elastic part τ = K_s (u_s − s) of the friction spring) =
@@ -41,10 +42,8 @@
 use crate::assembly::{ElementLaws, States};
 use crate::element::{ElementError, TetGeometry};
 use crate::interface_element::{InterfaceKernel, INTERFACE_POINTS};
-use crate::laws::{
-    AnyInterfaceLaw, BulkLaw, BulkState, InterfaceLaw, InterfaceState, LawError, TangentKind,
-};
-use mesh::{InterfaceZone, Model};
+use crate::laws::{BulkLaw, BulkState, LawError, TangentKind};
+use mesh::Model;
 use nalgebra::{Vector3, Vector6};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -65,84 +64,6 @@ pub const ENERGY_TOLERANCE: f64 = 1e-2;
 /// reproduce uninterrupted ones exactly).
 const CHUNK: usize = 4096;
 
-/// How the reversible part of an interface point's energy is read.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub enum ReversibleRule {
-    /// Secant cohesive or elastic law (Tvergaard, elastic): ½ t·u.
-    Secant,
-    /// FCZM: ½ t·u − ½ D τ·s with τ = K_s (u_s − s) (see module doc).
-    DamageFriction {
-        /// K_s, N/m³.
-        shear_stiffness: f64,
-    },
-    /// Coulomb (elastic springs with plastic slip): ½ t_n u_n + ½ |t_s|²/K_s.
-    Plastic {
-        /// K_s, N/m³.
-        shear_stiffness: f64,
-    },
-}
-
-impl ReversibleRule {
-    /// The rule of a law of SPEC §5.
-    pub fn of(law: &AnyInterfaceLaw) -> Self {
-        let ks = law.elastic_stiffness()[(1, 1)];
-        match law {
-            AnyInterfaceLaw::Fczm(_) => ReversibleRule::DamageFriction {
-                shear_stiffness: ks,
-            },
-            AnyInterfaceLaw::Coulomb(_) => ReversibleRule::Plastic {
-                shear_stiffness: ks,
-            },
-            AnyInterfaceLaw::Tvergaard(_) | AnyInterfaceLaw::Elastic(_) => ReversibleRule::Secant,
-        }
-    }
-
-    /// Stored energy per area (J/m²) of a point with traction `t` (Pa) at
-    /// jump `u` (m) and committed state `state`.
-    pub fn stored(&self, t: &Vector3<f64>, u: &Vector3<f64>, state: &InterfaceState) -> f64 {
-        match *self {
-            ReversibleRule::Secant => 0.5 * t.dot(u),
-            ReversibleRule::DamageFriction { shear_stiffness } => {
-                let s = [state.slip[0], state.slip[1]];
-                let tau = [
-                    shear_stiffness * (u[1] - s[0]),
-                    shear_stiffness * (u[2] - s[1]),
-                ];
-                0.5 * t.dot(u) - 0.5 * state.damage * (tau[0] * s[0] + tau[1] * s[1])
-            }
-            ReversibleRule::Plastic { shear_stiffness } => {
-                0.5 * t[0] * u[0] + 0.5 * (t[1] * t[1] + t[2] * t[2]) / shear_stiffness
-            }
-        }
-    }
-}
-
-/// The reversible rule of each interface zone's law.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct ZoneRules {
-    pub adhesive: ReversibleRule,
-    pub free: ReversibleRule,
-}
-
-impl ZoneRules {
-    /// Rules from the zones' laws; a zone without a law gets `Secant` (it
-    /// has no element to apply it to).
-    pub fn from_laws(adhesive: Option<&AnyInterfaceLaw>, free: Option<&AnyInterfaceLaw>) -> Self {
-        let rule =
-            |l: Option<&AnyInterfaceLaw>| l.map_or(ReversibleRule::Secant, ReversibleRule::of);
-        Self {
-            adhesive: rule(adhesive),
-            free: rule(free),
-        }
-    }
-    fn of(&self, zone: InterfaceZone) -> ReversibleRule {
-        match zone {
-            InterfaceZone::Adhesive => self.adhesive,
-            InterfaceZone::Free => self.free,
-        }
-    }
-}
-
 /// Stress (Pa) and stored energy density (J/m³) of a bulk point at total
 /// strain `strain` with committed state `state`: ½ σ·(ε − ε_p).
 pub fn bulk_point(
@@ -151,19 +72,7 @@ pub fn bulk_point(
     strain: &Vector6<f64>,
 ) -> Result<(Vector6<f64>, f64), LawError> {
     let r = law.step(state, strain, TangentKind::Secant)?;
-    let elastic = strain - Vector6::from_column_slice(&state.plastic_strain);
-    Ok((r.stress, 0.5 * r.stress.dot(&elastic)))
-}
-
-/// Traction (Pa) and stored energy per area (J/m²) of an interface point.
-pub fn interface_point(
-    law: &dyn InterfaceLaw,
-    rule: ReversibleRule,
-    state: &InterfaceState,
-    jump: &Vector3<f64>,
-) -> Result<(Vector3<f64>, f64), LawError> {
-    let r = law.step(state, jump, TangentKind::Secant)?;
-    Ok((r.traction, rule.stored(&r.traction, jump, state)))
+    Ok((r.stress, law.stored_energy(state, strain, &r.stress)))
 }
 
 /// Energies after a converged step, J (whole specimen).
@@ -221,7 +130,6 @@ pub struct EnergyStart<'s> {
 pub struct EnergyTracker<'a> {
     model: &'a Model,
     laws: &'a ElementLaws,
-    rules: ZoneRules,
     force_factor: f64,
     tets: Vec<TetGeometry>,
     kernels: Vec<InterfaceKernel>,
@@ -235,11 +143,7 @@ pub struct EnergyTracker<'a> {
 
 impl<'a> EnergyTracker<'a> {
     /// A tracker at the unloaded state (u = 0, initial states).
-    pub fn new(
-        model: &'a Model,
-        laws: &'a ElementLaws,
-        rules: ZoneRules,
-    ) -> Result<Self, EnergyError> {
+    pub fn new(model: &'a Model, laws: &'a ElementLaws) -> Result<Self, EnergyError> {
         let u = vec![0.0; 3 * model.nodes.len()];
         let start = EnergyStart {
             u: &u,
@@ -248,14 +152,13 @@ impl<'a> EnergyTracker<'a> {
             lambda: 0.0,
             force: 0.0,
         };
-        Self::resume(model, laws, rules, start)
+        Self::resume(model, laws, start)
     }
 
     /// A tracker continuing after the converged state `start`.
     pub fn resume(
         model: &'a Model,
         laws: &'a ElementLaws,
-        rules: ZoneRules,
         start: EnergyStart<'_>,
     ) -> Result<Self, EnergyError> {
         let EnergyStart {
@@ -278,7 +181,6 @@ impl<'a> EnergyTracker<'a> {
         let mut tracker = Self {
             model,
             laws,
-            rules,
             force_factor: model.symmetry.force_factor(),
             tets,
             kernels,
@@ -359,44 +261,40 @@ impl<'a> EnergyTracker<'a> {
             })
             .collect();
         let kernels = &self.kernels;
-        let rules = self.rules;
-        let iface: Vec<Result<(f64, f64), EnergyError>> =
-            self.traction_old
-                .par_chunks_mut(CHUNK * INTERFACE_POINTS)
-                .enumerate()
-                .map(|(c, chunk)| {
-                    let (mut work, mut stored) = (0.0, 0.0);
-                    for (k, olds) in chunk.chunks_mut(INTERFACE_POINTS).enumerate() {
-                        let i = c * CHUNK + k;
-                        let Some(law) = laws.interfaces[i].as_ref() else {
-                            continue;
-                        };
-                        let e = &model.interfaces[i];
-                        let rule = rules.of(e.zone);
-                        let gather = |v: &[f64]| -> [f64; 18] {
-                            std::array::from_fn(|j| v[3 * e.nodes[j / 3] as usize + j % 3])
-                        };
-                        let (ue, ue_old) = (gather(u), gather(u_old));
-                        let kern = &kernels[i];
-                        for (p, old) in olds.iter_mut().enumerate() {
-                            let (jump, jump_old) =
-                                (kern.local_jump(&ue, p), kern.local_jump(&ue_old, p));
-                            let state = &states.interface[INTERFACE_POINTS * i + p];
-                            let (t, psi) = interface_point(law.as_ref(), rule, state, &jump)
-                                .map_err(|source| EnergyError::Law {
-                                    what: "interface element",
-                                    index: i,
-                                    source,
-                                })?;
-                            let t_old = Vector3::from_column_slice(old);
-                            work += 0.5 * (t_old + t).dot(&(jump - jump_old)) * kern.weight;
-                            stored += psi * kern.weight;
-                            old.copy_from_slice(t.as_slice());
-                        }
+        let iface: Vec<Result<(f64, f64), EnergyError>> = self
+            .traction_old
+            .par_chunks_mut(CHUNK * INTERFACE_POINTS)
+            .enumerate()
+            .map(|(c, chunk)| {
+                let (mut work, mut stored) = (0.0, 0.0);
+                for (k, olds) in chunk.chunks_mut(INTERFACE_POINTS).enumerate() {
+                    let i = c * CHUNK + k;
+                    let Some(law) = laws.interfaces[i].as_ref() else {
+                        continue;
+                    };
+                    let kern = &kernels[i];
+                    let states = &states.interface[INTERFACE_POINTS * i..];
+                    let points = kern
+                        .tractions(law.as_ref(), u, states, TangentKind::Secant)
+                        .map_err(|e| EnergyError::Law {
+                            what: "interface element",
+                            index: i,
+                            source: e.source,
+                        })?;
+                    let ue_old = kern.gather(u_old);
+                    for (p, (old, r)) in olds.iter_mut().zip(&points).enumerate() {
+                        let (jump, t) = (r.jump, r.law.traction);
+                        let jump_old = kern.local_jump(&ue_old, p);
+                        let psi = law.stored_energy(&states[p], &jump, &t);
+                        let t_old = Vector3::from_column_slice(old);
+                        work += 0.5 * (t_old + t).dot(&(jump - jump_old)) * kern.weight;
+                        stored += psi * kern.weight;
+                        old.copy_from_slice(t.as_slice());
                     }
-                    Ok((work, stored))
-                })
-                .collect();
+                }
+                Ok((work, stored))
+            })
+            .collect();
         let (mut work, mut stored) = (0.0, 0.0);
         for r in bulk.into_iter().chain(iface) {
             let (w, s) = r?;
@@ -525,7 +423,8 @@ mod tests {
     use crate::assembly::SharedInterfaceLaw;
     use crate::laws::fczm::{Fczm, DEFAULT_GAMMA};
     use crate::laws::j2::J2;
-    use mesh::{Frame, InterfaceElement, Region};
+    use crate::laws::{InterfaceLaw, InterfaceState};
+    use mesh::{Frame, InterfaceElement, InterfaceZone, Region};
     use std::sync::Arc;
 
     fn fczm() -> Fczm {
@@ -545,7 +444,6 @@ mod tests {
     /// Drives one interface point along `path` (jumps) and returns the
     /// trapezoidal work and the final stored energy per area.
     fn drive(law: &Fczm, path: &[Vector3<f64>]) -> (f64, f64) {
-        let rule = ReversibleRule::of(&AnyInterfaceLaw::Fczm(*law));
         let (mut state, mut t_old, mut u_old) = (
             InterfaceState::default(),
             Vector3::zeros(),
@@ -556,7 +454,8 @@ mod tests {
         for u in path {
             let r = law.step(&state, u, TangentKind::Secant).unwrap();
             state = r.state;
-            let (t, psi) = interface_point(law, rule, &state, u).unwrap();
+            let t = law.step(&state, u, TangentKind::Secant).unwrap().traction;
+            let psi = law.stored_energy(&state, u, &t);
             work += 0.5 * (t + t_old).dot(&(u - u_old));
             (t_old, u_old, stored) = (t, *u, psi);
         }
@@ -706,8 +605,7 @@ mod tests {
             tets: Vec::new(),
             interfaces: vec![Some(shared)],
         };
-        let rules = ZoneRules::from_laws(Some(&AnyInterfaceLaw::Fczm(law)), None);
-        let mut tracker = EnergyTracker::new(&model, &laws, rules).unwrap();
+        let mut tracker = EnergyTracker::new(&model, &laws).unwrap();
         let mut states = States::initial(&model);
         let steps = 4000;
         let lam_end = 4e-4;

@@ -182,19 +182,17 @@ pub fn write_interface_vtu(
         let Some(law) = &laws.interfaces[index] else {
             continue;
         };
-        let k = InterfaceKernel::new(e);
-        let ue: [f64; 18] = std::array::from_fn(|i| u[3 * e.nodes[i / 3] as usize + i % 3]);
+        let states = &states.interface[INTERFACE_POINTS * index..INTERFACE_POINTS * (index + 1)];
+        let points = InterfaceKernel::new(e)
+            .tractions(law.as_ref(), u, states, TangentKind::Secant)
+            .map_err(|err| FieldsError::Element {
+                index,
+                detail: format!("node pair {}: {}", err.point, err.source),
+            })?;
         let (mut d, mut t, mut s) = (0.0, [0.0; 3], [0.0; 2]);
-        for p in 0..INTERFACE_POINTS {
-            let st = &states.interface[INTERFACE_POINTS * index + p];
-            let r = law
-                .step(st, &k.local_jump(&ue, p), TangentKind::Secant)
-                .map_err(|err| FieldsError::Element {
-                    index,
-                    detail: err.to_string(),
-                })?;
+        for (st, r) in states.iter().zip(&points) {
             d += st.damage / INTERFACE_POINTS as f64;
-            for (tc, rc) in t.iter_mut().zip(r.traction.iter()) {
+            for (tc, rc) in t.iter_mut().zip(r.law.traction.iter()) {
                 *tc += rc / INTERFACE_POINTS as f64;
             }
             for (sc, pc) in s.iter_mut().zip(st.slip.iter()) {

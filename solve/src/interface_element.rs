@@ -18,19 +18,38 @@
 //! rather than at interior points whose state mixes neighbours. The
 //! integration point `i` of an element is therefore the node pair `i`.
 
+use crate::laws::{InterfaceLaw, InterfaceResponse, InterfaceState, LawError, TangentKind};
 use mesh::InterfaceElement;
 use nalgebra::{Matrix3, Vector3};
 
 /// Number of integration points (node pairs) of an interface element.
 pub const INTERFACE_POINTS: usize = 3;
 
-/// Precomputed frame and weight of one interface element.
+/// Precomputed nodes, frame and weight of one interface element.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct InterfaceKernel {
+    /// Global node indices `[s0, s1, s2, c0, c1, c2]`.
+    pub nodes: [u32; 6],
     /// Rotation global → local, rows `n, t, h`.
     pub rotation: Matrix3<f64>,
     /// Integration weight A/3 of each node pair, m².
     pub weight: f64,
+}
+
+/// The law's answer at one node pair.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PointResponse {
+    /// Local jump `(u_n, u_t, u_h)`, m.
+    pub jump: Vector3<f64>,
+    /// Traction, tangent and trial state.
+    pub law: InterfaceResponse,
+}
+
+/// The law failed at one node pair.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PointError {
+    pub point: usize,
+    pub source: LawError,
 }
 
 impl InterfaceKernel {
@@ -40,9 +59,15 @@ impl InterfaceKernel {
             f.n[0], f.n[1], f.n[2], f.t[0], f.t[1], f.t[2], f.h[0], f.h[1], f.h[2],
         );
         Self {
+            nodes: element.nodes,
             rotation,
             weight: element.area / INTERFACE_POINTS as f64,
         }
+    }
+
+    /// The 18 element values of the global node-major vector `v`.
+    pub fn gather(&self, v: &[f64]) -> [f64; 18] {
+        std::array::from_fn(|i| v[3 * self.nodes[i / 3] as usize + i % 3])
     }
 
     /// Local jump `(u_n, u_t, u_h)` (m) at integration point `point` from the
@@ -54,6 +79,36 @@ impl InterfaceKernel {
         self.rotation * jump
     }
 
+    /// Steps `law` at every node pair from the pairs' `committed` states at
+    /// the global displacement `u` (m): the one place where an interface
+    /// element meets its law (assembly, fields, energy and profiles all
+    /// read tractions through it).
+    pub fn tractions(
+        &self,
+        law: &dyn InterfaceLaw,
+        u: &[f64],
+        committed: &[InterfaceState],
+        kind: TangentKind,
+    ) -> Result<[PointResponse; INTERFACE_POINTS], PointError> {
+        let ue = self.gather(u);
+        let mut out = [PointResponse {
+            jump: Vector3::zeros(),
+            law: InterfaceResponse {
+                traction: Vector3::zeros(),
+                tangent: Matrix3::zeros(),
+                state: InterfaceState::default(),
+            },
+        }; INTERFACE_POINTS];
+        for (point, (o, state)) in out.iter_mut().zip(committed).enumerate() {
+            let jump = self.local_jump(&ue, point);
+            let law = law
+                .step(state, &jump, kind)
+                .map_err(|source| PointError { point, source })?;
+            *o = PointResponse { jump, law };
+        }
+        Ok(out)
+    }
+
     /// Adds the nodal forces (N) of the local traction (Pa) at `point` into `out`.
     pub fn add_force(&self, point: usize, traction: &Vector3<f64>, out: &mut [f64; 18]) {
         let g = self.rotation.transpose() * traction * self.weight;
@@ -63,27 +118,29 @@ impl InterfaceKernel {
         }
     }
 
-    /// Adds the stiffness (N/m) of the local tangent (N/m³) at `point` into
-    /// `out` (18×18 row-major).
-    pub fn add_stiffness(&self, point: usize, tangent: &Matrix3<f64>, out: &mut [f64; 324]) {
+    /// Stiffness (N/m) of the local tangent (N/m³) at a node pair, over the
+    /// pair's DOFs `[s_p (3), c_p (3)]` (6×6 row-major): the nodal rule
+    /// couples a pair to nothing else.
+    pub fn pair_stiffness(&self, tangent: &Matrix3<f64>) -> [f64; 36] {
         let k = self.rotation.transpose() * tangent * self.rotation * self.weight;
-        let (s, c) = (3 * point, 3 * (point + 3));
+        let mut out = [0.0; 36];
         for i in 0..3 {
             for j in 0..3 {
                 let v = k[(i, j)];
-                out[18 * (s + i) + s + j] += v;
-                out[18 * (c + i) + c + j] += v;
-                out[18 * (s + i) + c + j] -= v;
-                out[18 * (c + i) + s + j] -= v;
+                out[6 * i + j] = v;
+                out[6 * (i + 3) + j + 3] = v;
+                out[6 * i + j + 3] = -v;
+                out[6 * (i + 3) + j] = -v;
             }
         }
+        out
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::laws::{elastic::ElasticInterface, InterfaceLaw, InterfaceState, TangentKind};
+    use crate::laws::{elastic::ElasticInterface, InterfaceLaw};
     use mesh::{Frame, InterfaceZone};
 
     fn element() -> InterfaceElement {
@@ -122,14 +179,20 @@ mod tests {
         }
         let mut f = [0.0; 18];
         let mut kk = [0.0; 324];
-        for p in 0..3 {
-            let j = k.local_jump(&u, p);
-            assert!((j - jump_local).norm() < 1e-18);
-            let r = law
-                .step(&InterfaceState::default(), &j, TangentKind::Consistent)
-                .unwrap();
-            k.add_force(p, &r.traction, &mut f);
-            k.add_stiffness(p, &r.tangent, &mut kk);
+        let committed = [InterfaceState::default(); INTERFACE_POINTS];
+        let points = k
+            .tractions(&law, &u, &committed, TangentKind::Consistent)
+            .unwrap();
+        for (p, r) in points.iter().enumerate() {
+            assert!((r.jump - jump_local).norm() < 1e-18);
+            k.add_force(p, &r.law.traction, &mut f);
+            let pair = k.pair_stiffness(&r.law.tangent);
+            let d: [usize; 6] = std::array::from_fn(|i| 3 * (p + 3 * (i / 3)) + i % 3);
+            for a in 0..6 {
+                for b in 0..6 {
+                    kk[18 * d[a] + d[b]] += pair[6 * a + b];
+                }
+            }
         }
         let t_global = k.rotation.transpose() * (law.elastic_stiffness() * jump_local);
         let mut total = [0.0; 3];

@@ -135,6 +135,18 @@ impl InterfaceLaw for Coulomb {
         })
     }
 
+    /// Elastic springs with plastic slip: ½ t_n u_n + ½ |t_s|²/K_s.
+    fn stored_energy(
+        &self,
+        _state: &InterfaceState,
+        jump: &Vector3<f64>,
+        traction: &Vector3<f64>,
+    ) -> f64 {
+        let ks = self.elastic_stiffness()[(1, 1)];
+        0.5 * traction[0] * jump[0]
+            + 0.5 * (traction[1] * traction[1] + traction[2] * traction[2]) / ks
+    }
+
     fn elastic_stiffness(&self) -> Matrix3<f64> {
         Matrix3::from_diagonal(&Vector3::new(
             self.normal_stiffness,

@@ -271,6 +271,21 @@ impl InterfaceLaw for Fczm {
         })
     }
 
+    /// Undamaged part ½ [P_n K_n u_n² + P_s K_s |u_s|²] plus damaged part
+    /// D [½ K_n ⟨u_n⟩₋² + ½ |τ|²/K_s] with τ = K_s (u_s − s), which is
+    /// ½ t·u − ½ D τ·s (solve::energy).
+    fn stored_energy(
+        &self,
+        state: &InterfaceState,
+        jump: &Vector3<f64>,
+        traction: &Vector3<f64>,
+    ) -> f64 {
+        let ks = self.elastic_stiffness()[(1, 1)];
+        let s = [state.slip[0], state.slip[1]];
+        let tau = [ks * (jump[1] - s[0]), ks * (jump[2] - s[1])];
+        0.5 * traction.dot(jump) - 0.5 * state.damage * (tau[0] * s[0] + tau[1] * s[1])
+    }
+
     fn elastic_stiffness(&self) -> Matrix3<f64> {
         Matrix3::from_diagonal(&Vector3::new(
             self.normal_stiffness(),

@@ -120,6 +120,21 @@ pub trait BulkLaw: Sync {
     fn yield_stress(&self) -> Option<f64> {
         None
     }
+
+    /// Recoverable energy density (J/m³) at `strain` with `stress`, the
+    /// state `state` being committed there: ½ σ·(ε − ε_p), which is every
+    /// law here (Mazars σ = (1 − D) C ε: ½ ε·C_sec·ε; J2 σ = C (ε − ε_p);
+    /// elastic ½ σ·ε). A law whose unloading is not secant to ε_p says so
+    /// by overriding it.
+    fn stored_energy(
+        &self,
+        state: &BulkState,
+        strain: &Vector6<f64>,
+        stress: &Vector6<f64>,
+    ) -> f64 {
+        let elastic = strain - Vector6::from_column_slice(&state.plastic_strain);
+        0.5 * stress.dot(&elastic)
+    }
 }
 
 /// An interface constitutive law in the local frame.
@@ -132,6 +147,15 @@ pub trait InterfaceLaw: Sync {
     ) -> Result<InterfaceResponse, LawError>;
     /// The initial (undamaged) stiffness diag(K_n, K_s, K_s), N/m³.
     fn elastic_stiffness(&self) -> Matrix3<f64>;
+    /// Recoverable energy per area (J/m²) at `jump` with `traction`, the
+    /// state `state` being committed there: what unloading to zero traction
+    /// would give back (the rest of the work is dissipated).
+    fn stored_energy(
+        &self,
+        state: &InterfaceState,
+        jump: &Vector3<f64>,
+        traction: &Vector3<f64>,
+    ) -> f64;
 }
 
 /// `Err(NonFiniteInput)` unless every component is finite.
@@ -205,6 +229,20 @@ impl InterfaceLaw for AnyInterfaceLaw {
         }
     }
 
+    fn stored_energy(
+        &self,
+        state: &InterfaceState,
+        jump: &Vector3<f64>,
+        traction: &Vector3<f64>,
+    ) -> f64 {
+        match self {
+            AnyInterfaceLaw::Fczm(l) => l.stored_energy(state, jump, traction),
+            AnyInterfaceLaw::Tvergaard(l) => l.stored_energy(state, jump, traction),
+            AnyInterfaceLaw::Coulomb(l) => l.stored_energy(state, jump, traction),
+            AnyInterfaceLaw::Elastic(l) => l.stored_energy(state, jump, traction),
+        }
+    }
+
     fn elastic_stiffness(&self) -> Matrix3<f64> {
         match self {
             AnyInterfaceLaw::Fczm(l) => l.elastic_stiffness(),
@@ -250,6 +288,19 @@ impl BulkLaw for AnyBulkLaw {
         match self {
             AnyBulkLaw::J2(l) => l.yield_stress(),
             _ => None,
+        }
+    }
+
+    fn stored_energy(
+        &self,
+        state: &BulkState,
+        strain: &Vector6<f64>,
+        stress: &Vector6<f64>,
+    ) -> f64 {
+        match self {
+            AnyBulkLaw::Mazars(l) => l.stored_energy(state, strain, stress),
+            AnyBulkLaw::J2(l) => l.stored_energy(state, strain, stress),
+            AnyBulkLaw::Elastic(l) => l.stored_energy(state, strain, stress),
         }
     }
 }

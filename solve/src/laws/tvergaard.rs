@@ -117,6 +117,16 @@ impl InterfaceLaw for Tvergaard {
         })
     }
 
+    /// Secant law (the traction unloads to the origin): ½ t·u.
+    fn stored_energy(
+        &self,
+        _state: &InterfaceState,
+        jump: &Vector3<f64>,
+        traction: &Vector3<f64>,
+    ) -> f64 {
+        0.5 * traction.dot(jump)
+    }
+
     fn elastic_stiffness(&self) -> Matrix3<f64> {
         Matrix3::from_diagonal(&Vector3::new(
             self.normal_stiffness(),
