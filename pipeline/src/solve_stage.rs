@@ -4,8 +4,8 @@
 //! fields and the interface traction profiles along the bar.
 //!
 //! The energy balance of every converged step (`solve::energy`) is tracked
-//! alongside: `curve.csv` carries `w_ext,w_int,stored,dissipated` (J, whole
-//! specimen) after the six required columns, and `solve.json` an
+//! alongside: `curve.csv` carries the energy columns (J, whole specimen;
+//! `solve::curve::ENERGY_COLUMNS`) after the curve's, and `solve.json` an
 //! `energy_check` object. Its record is saved next to each checkpoint
 //! (before it), so a resumed run continues the sums and writes the same
 //! values as an uninterrupted one.
@@ -18,9 +18,7 @@ use solve::assembly::{ElementLaws, SharedBulkLaw, SharedInterfaceLaw};
 use solve::energy::{EnergyRow, EnergyStart, EnergyTracker, ENERGY_TOLERANCE};
 use solve::interface_element::{InterfaceKernel, INTERFACE_POINTS};
 use solve::laws::{InterfaceLaw, TangentKind};
-use solve::nonlinear::{
-    Checkpoint, CommittedView, CurveRow, Cutback, Observer, SolveError, StepReport,
-};
+use solve::nonlinear::{Checkpoint, CommittedView, Cutback, Observer, SolveError, StepReport};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -62,33 +60,6 @@ pub fn element_laws(model: &Model, scene: &crate::scene::Scene) -> Result<Elemen
             model.tet_size.get(tet).copied().unwrap_or(f64::NAN) * 1e3
         )
     })
-}
-
-/// The curve; with `energy` (one row per step) the energy columns follow.
-fn curve_csv(rows: &[CurveRow], energy: Option<&[EnergyRow]>) -> Vec<u8> {
-    let energy = energy.filter(|e| e.len() == rows.len());
-    let mut out = b"step,u_imposed,force,fed,bond_stress,iterations".to_vec();
-    if energy.is_some() {
-        out.extend_from_slice(b",w_ext,w_int,stored,dissipated");
-    }
-    out.push(b'\n');
-    for (i, r) in rows.iter().enumerate() {
-        let _ = write!(
-            out,
-            "{},{:e},{:e},{:e},{:e},{}",
-            r.step, r.u_imposed, r.force, r.fed, r.bond_stress, r.iterations
-        );
-        if let Some(e) = energy {
-            let e = &e[i];
-            let _ = write!(
-                out,
-                ",{:e},{:e},{:e},{:e}",
-                e.w_ext, e.w_int, e.stored, e.dissipated
-            );
-        }
-        out.push(b'\n');
-    }
-    out
 }
 
 /// Mean interface tractions in axial bins along the adhesive zone, for the
@@ -375,25 +346,12 @@ pub fn run(ctx: &Ctx, mesh_dir: &Path, out: &Path) -> Result<()> {
     let resumed_steps = checkpoint.as_ref().map_or(0, |cp| cp.rows.len());
     let (peak_so_far, peak_passed) = match checkpoint.as_ref().filter(|cp| !cp.rows.is_empty()) {
         Some(cp) => {
-            let rows: Vec<crate::post::CurveRow> = cp
-                .rows
-                .iter()
-                .map(|r| {
-                    crate::post::CurveRow::new(
-                        r.step as u64,
-                        r.u_imposed,
-                        r.force,
-                        r.fed,
-                        r.bond_stress,
-                        r.iterations as u64,
-                    )
-                })
-                .collect();
-            let (first, _, step) = crate::post::first_peak_bond_stress(&rows)?;
+            let (first, _, step) = crate::post::first_peak_bond_stress(&cp.rows)?;
             (
                 first,
-                (step as usize) < cp.rows.len()
-                    && rows
+                step < cp.rows.len()
+                    && cp
+                        .rows
                         .iter()
                         .any(|r| r.bond_stress < (1.0 - crate::post::FIRST_PEAK_DROP) * first),
             )
@@ -519,7 +477,7 @@ pub fn run(ctx: &Ctx, mesh_dir: &Path, out: &Path) -> Result<()> {
     };
     crate::store::write_atomic(
         &out.join("curve.csv"),
-        &curve_csv(&result.rows, energy_rows.as_deref()),
+        solve::curve::write_curve_csv(&result.rows, energy_rows.as_deref()).as_bytes(),
     )?;
     match result.ending {
         solve::nonlinear::Ending::Completed => {}

@@ -85,9 +85,13 @@ fn run_writes_every_artifact() {
     }
     let curve = read(&scene.join("curve.csv"));
     // The six required columns, then the energy balance's (issue 7).
-    assert!(curve.starts_with(
-        "step,u_imposed,force,fed,bond_stress,iterations,w_ext,w_int,stored,dissipated\n"
-    ));
+    let header = [
+        solve::curve::CURVE_COLUMNS.as_slice(),
+        &solve::curve::ENERGY_COLUMNS,
+    ]
+    .concat()
+    .join(",");
+    assert_eq!(curve.lines().next(), Some(header.as_str()), "{curve}");
     assert!(curve.lines().count() > 5, "{curve}");
     let summary: serde_json::Value =
         serde_json::from_str(&read(&scene.join("summary.json"))).unwrap();

@@ -30,7 +30,7 @@ fn curve(peak_mpa: f64, s0_mm: f64, residual: f64, n: usize) -> Vec<CurveRow> {
             } else {
                 peak_mpa * (residual + (1.0 - residual) * shape)
             };
-            CurveRow::new(i as u64, 0.0, 0.0, s * 1e-3, sigma * 1e6, 3)
+            CurveRow::new(i, 0.0, 0.0, s * 1e-3, sigma * 1e6, 3)
         })
         .collect()
 }

@@ -22,14 +22,7 @@ fn rows_mm_mpa(points: &[(f64, f64)]) -> Vec<CurveRow> {
         .iter()
         .enumerate()
         .map(|(i, &(fed, s))| {
-            CurveRow::new(
-                i as u64 + 1,
-                2.0 * fed * 1e-3,
-                s * 1e3,
-                fed * 1e-3,
-                s * 1e6,
-                3,
-            )
+            CurveRow::new(i + 1, 2.0 * fed * 1e-3, s * 1e3, fed * 1e-3, s * 1e6, 3)
         })
         .collect()
 }
@@ -188,7 +181,7 @@ fn energy_of_analytic_curve() {
             let t = i as f64 / n as f64;
             let s = end * t * t;
             let sigma = a * (s / s0) * (1.0 - s / s0).exp();
-            CurveRow::new(i as u64, s, 0.0, s, sigma, 1)
+            CurveRow::new(i, s, 0.0, s, sigma, 1)
         })
         .collect();
     let (peak, fed, _) = peak_bond_stress(&rows).unwrap();
@@ -304,7 +297,7 @@ fn rows_xy(points: &[(f64, f64)]) -> Vec<CurveRow> {
     points
         .iter()
         .enumerate()
-        .map(|(i, &(x, s))| CurveRow::new(i as u64 + 1, x, 0.0, x, s, 1))
+        .map(|(i, &(x, s))| CurveRow::new(i + 1, x, 0.0, x, s, 1))
         .collect()
 }
 
@@ -330,7 +323,7 @@ fn curve_distance_closed_forms() {
 /// along the imposed displacement it does.
 #[test]
 fn curve_distance_axes_differ_on_pre_slip() {
-    let row = |i: u64, u: f64, fed: f64, s: f64| CurveRow::new(i, u, 0.0, fed, s, 1);
+    let row = |i: usize, u: f64, fed: f64, s: f64| CurveRow::new(i, u, 0.0, fed, s, 1);
     let a = vec![
         row(1, 1.0, 0.0, 5e6),
         row(2, 2.0, 0.0, 8e6),
@@ -376,7 +369,7 @@ fn first_peak_is_the_adhesion_peak() {
     let rows: Vec<CurveRow> = pts
         .iter()
         .enumerate()
-        .map(|(i, &(fed, s))| CurveRow::new(i as u64 + 1, fed, 0.0, fed, s, 1))
+        .map(|(i, &(fed, s))| CurveRow::new(i + 1, fed, 0.0, fed, s, 1))
         .collect();
     let (first, fed, step) = first_peak_bond_stress(&rows).unwrap();
     assert_eq!((first, fed, step), (5.7e6, 3e-5, 2));

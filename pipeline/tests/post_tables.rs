@@ -20,9 +20,7 @@ fn curve(peak_mpa: f64) -> Vec<CurveRow> {
     [(0.2, 0.5), (0.5, 1.0), (1.0, 0.6), (2.0, 0.4)]
         .iter()
         .enumerate()
-        .map(|(i, &(fed, k))| {
-            CurveRow::new(i as u64 + 1, 0.0, 0.0, fed * 1e-3, k * peak_mpa * 1e6, 2)
-        })
+        .map(|(i, &(fed, k))| CurveRow::new(i + 1, 0.0, 0.0, fed * 1e-3, k * peak_mpa * 1e6, 2))
         .collect()
 }
 

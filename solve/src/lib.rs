@@ -2,6 +2,7 @@
 
 pub mod amg;
 pub mod assembly;
+pub mod curve;
 pub mod element;
 pub mod energy;
 pub mod fields;

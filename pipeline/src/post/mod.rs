@@ -15,7 +15,7 @@
 //! let rows: Vec<CurveRow> = [(0.0, 0.0), (1e-3, 10e6), (2e-3, 0.0)]
 //!     .iter()
 //!     .enumerate()
-//!     .map(|(i, &(fed, s))| CurveRow::new(i as u64, fed, 0.0, fed, s, 1))
+//!     .map(|(i, &(fed, s))| CurveRow::new(i, fed, 0.0, fed, s, 1))
 //!     .collect();
 //! let opts = SummaryOptions { energy_fed_limit: Some(2e-3), residual_fraction: 0.5 };
 //! let s = summarize(&rows, &opts).unwrap();

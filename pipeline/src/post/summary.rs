@@ -37,7 +37,7 @@ pub struct CurveSummary {
     /// FED of the first step where the peak is reached, m.
     pub fed_at_peak: f64,
     /// Step number where the peak is reached.
-    pub step_at_peak: u64,
+    pub step_at_peak: usize,
     /// First (adhesion) peak σ_mb, Pa: see [`first_peak_bond_stress`].
     #[serde(default)]
     pub first_peak_bond_stress: f64,
@@ -62,7 +62,7 @@ pub struct CurveSummary {
     /// Converged steps in the curve.
     pub steps: usize,
     /// Newton iterations summed over the steps.
-    pub total_iterations: u64,
+    pub total_iterations: usize,
 }
 
 impl CurveSummary {
@@ -127,7 +127,7 @@ fn vertices(rows: &[CurveRow]) -> impl Iterator<Item = (f64, f64)> + '_ {
 }
 
 /// Peak σ_mb (Pa), the FED at it (m) and its step; the first step wins ties.
-pub fn peak_bond_stress(rows: &[CurveRow]) -> Result<(f64, f64, u64), PostError> {
+pub fn peak_bond_stress(rows: &[CurveRow]) -> Result<(f64, f64, usize), PostError> {
     check_rows(rows)?;
     let mut best = &rows[0];
     for r in rows {
@@ -217,7 +217,7 @@ pub const FIRST_PEAK_DROP: f64 = 0.05;
 /// On a ribbed bar the frictional branch can rise above the adhesion peak
 /// later; this is the peak of the bond's first failure. Without such a drop
 /// it is the overall peak.
-pub fn first_peak_bond_stress(rows: &[CurveRow]) -> Result<(f64, f64, u64), PostError> {
+pub fn first_peak_bond_stress(rows: &[CurveRow]) -> Result<(f64, f64, usize), PostError> {
     check_rows(rows)?;
     let mut best = &rows[0];
     for r in rows {

@@ -4,24 +4,9 @@
 use super::checkpoint::Checkpoint;
 use super::failure::StepFailure;
 use crate::assembly::{ElementLaws, EvalTimings, States};
+pub use crate::curve::CurveRow;
 use mesh::Model;
 use serde::{Deserialize, Serialize};
-
-/// One row of `curve.csv` (SI).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct CurveRow {
-    pub step: usize,
-    /// Imposed displacement λ, m.
-    pub u_imposed: f64,
-    /// Reaction F, N.
-    pub force: f64,
-    /// Free-end displacement (relative displacement), m.
-    pub fed: f64,
-    /// Mean bond stress σ_mb, Pa.
-    pub bond_stress: f64,
-    /// Newton iterations of the converged attempt.
-    pub iterations: usize,
-}
 
 /// Wall times by phase, s.
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
