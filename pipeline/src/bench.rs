@@ -254,7 +254,7 @@ fn mesh_variant(
     overrides.push(format!("specimen.symmetry={symmetry}"));
     overrides.push(format!("name=bench-linear-{symmetry}"));
     let scene = Scene::load(&smooth80_spec(), &overrides)?;
-    run_scene(&scene, work, &["geometry", "mesh"], printer)?;
+    run_scene(&scene, work, crate::stage::Stage::Mesh.up_to(), printer)?;
     let model = work.join(&scene.name).join(mesh::MODEL_FILE);
     Ok((scene, model))
 }

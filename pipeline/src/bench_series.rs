@@ -138,7 +138,7 @@ pub fn run_and_read(
     o.push(format!("name={name}"));
     let outcome = Scene::load(spec, &o)
         .map_err(anyhow::Error::from)
-        .and_then(|scene| run_scene(&scene, work, &crate::stages::STAGES, printer));
+        .and_then(|scene| run_scene(&scene, work, &crate::stage::Stage::ALL, printer));
     let mut rec = RunRecord::read(name, &work.join(name));
     if let Err(e) = outcome {
         printer.line(&format!("[{name}] {e:#}"));

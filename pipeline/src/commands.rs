@@ -3,14 +3,14 @@
 use crate::cli::{CleanArgs, MaterialArgs};
 use crate::progress::Printer;
 use crate::scene::Scene;
-use crate::stages::{Ctx, Keys};
+use crate::stage::{Ctx, Keys, Stage};
 use crate::store::Store;
 use anyhow::{Context, Result};
 use std::path::Path;
 use std::process::ExitCode;
 
 /// Runs `stages` (in order, each only if stale) for one scene.
-pub fn run_scene(scene: &Scene, work: &Path, stages: &[&str], printer: &Printer) -> Result<()> {
+pub fn run_scene(scene: &Scene, work: &Path, stages: &[Stage], printer: &Printer) -> Result<()> {
     let gmsh = geom::gmsh::Gmsh::locate()?;
     let keys = Keys::of(scene, gmsh.version());
     let store = Store::new(work);
@@ -21,13 +21,13 @@ pub fn run_scene(scene: &Scene, work: &Path, stages: &[&str], printer: &Printer)
         gmsh: &gmsh,
         printer,
     };
-    for stage in stages {
-        ctx.ensure(stage)?;
+    for &stage in stages {
+        crate::stage::ensure(&ctx, stage)?;
     }
     printer.finish();
     let dir = store.scene_dir(&scene.name);
     printer.line(&format!("results: {}", dir.display()));
-    if stages.contains(&"solve") {
+    if stages.contains(&Stage::Solve) {
         if let Some(why) = incomplete_solve(&dir.join("solve.json")) {
             anyhow::bail!(
                 "the solve of {} stopped before the end of the loading: {why}; \

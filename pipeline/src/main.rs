@@ -6,7 +6,7 @@ use clap::Parser;
 use pipeline::cli::{Cli, Command, SceneArgs};
 use pipeline::progress::{Printer, Verbosity};
 use pipeline::scene::Scene;
-use pipeline::stages::{self, Keys, StageStatus, STAGES};
+use pipeline::stage::{self, Keys, Stage, StageStatus};
 use pipeline::store::Store;
 use std::process::ExitCode;
 
@@ -33,18 +33,12 @@ fn main() -> ExitCode {
     }
 }
 
-/// Which stages a stage command needs, in order.
-fn stages_up_to(last: &str) -> &'static [&'static str] {
-    let n = STAGES.iter().position(|s| *s == last).expect("known stage") + 1;
-    &STAGES[..n]
-}
-
 fn dispatch(command: Command, printer: &Printer) -> Result<ExitCode> {
     match command {
-        Command::Geometry(a) => run_stages(&a, stages_up_to("geometry"), printer),
-        Command::Mesh(a) => run_stages(&a, stages_up_to("mesh"), printer),
-        Command::Solve(a) => run_stages(&a, stages_up_to("solve"), printer),
-        Command::Post(a) | Command::Run(a) => run_stages(&a, &STAGES, printer),
+        Command::Geometry(a) => run_stages(&a, Stage::Geometry.up_to(), printer),
+        Command::Mesh(a) => run_stages(&a, Stage::Mesh.up_to(), printer),
+        Command::Solve(a) => run_stages(&a, Stage::Solve.up_to(), printer),
+        Command::Post(a) | Command::Run(a) => run_stages(&a, &Stage::ALL, printer),
         Command::Status(a) => status(&a),
         Command::Clean(a) => pipeline::commands::clean(&a, printer),
         Command::Material(a) => pipeline::commands::material(&a),
@@ -53,7 +47,7 @@ fn dispatch(command: Command, printer: &Printer) -> Result<ExitCode> {
     }
 }
 
-fn run_stages(args: &SceneArgs, stages: &[&str], printer: &Printer) -> Result<ExitCode> {
+fn run_stages(args: &SceneArgs, stages: &[Stage], printer: &Printer) -> Result<ExitCode> {
     let scene = Scene::load(&args.spec, &args.overrides)?;
     pipeline::commands::run_scene(&scene, &args.work, stages, printer)?;
     Ok(ExitCode::SUCCESS)
@@ -65,7 +59,7 @@ fn status(args: &SceneArgs) -> Result<ExitCode> {
     let keys = Keys::of(&scene, gmsh.version());
     let store = Store::new(&args.work);
     let mut all_done = true;
-    for (stage, st) in stages::status(&store, &scene, &keys)? {
+    for (stage, st) in stage::status(&store, &scene, &keys)? {
         let text = match &st {
             StageStatus::UpToDate => "up to date".to_string(),
             StageStatus::Missing => "missing".to_string(),
@@ -77,7 +71,7 @@ fn status(args: &SceneArgs) -> Result<ExitCode> {
                 "stale: changed {}",
                 changed
                     .iter()
-                    .map(|k| if STAGES.contains(&k.as_str()) {
+                    .map(|k| if Stage::from_name(k).is_some() {
                         format!("{k} (upstream stage)")
                     } else {
                         k.clone()

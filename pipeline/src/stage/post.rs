@@ -2,9 +2,10 @@
 //! wall times, the upstream stages' timings) and the plots, from the solve
 //! stage's files only.
 
+use super::ctx::Ctx;
+use super::kinds::Stage;
 use crate::outputs::PlotFormat;
 use crate::post::{self, InterfaceProfile, InterfaceSample, SummaryOptions};
-use crate::stages::Ctx;
 use anyhow::{Context, Result};
 use serde_json::{json, Value};
 use std::path::Path;
@@ -52,7 +53,9 @@ pub fn read_profiles(path: &Path) -> Result<Vec<InterfaceProfile>> {
     Ok(profiles.into_iter().map(|(_, p)| p).collect())
 }
 
-pub fn run(ctx: &Ctx, solve_dir: &Path, out: &Path) -> Result<()> {
+pub fn run(ctx: &Ctx, out: &Path) -> Result<()> {
+    let solve_dir = ctx.done_dir(Stage::Solve);
+    let solve_dir = solve_dir.as_path();
     let request = &ctx.scene.outputs.post;
     let rows = post::read_curve_csv(&solve_dir.join("curve.csv"))?;
     let solve = read_json(&solve_dir.join("solve.json"))?;
@@ -63,7 +66,7 @@ pub fn run(ctx: &Ctx, solve_dir: &Path, out: &Path) -> Result<()> {
             residual_fraction: request.residual_fraction,
         },
     )?;
-    let stage_time = |stage: &str| -> Value {
+    let stage_time = |stage: Stage| -> Value {
         ctx.store
             .wall_time(ctx.keys.get(stage))
             .map_or(Value::Null, Value::from)
@@ -74,8 +77,8 @@ pub fn run(ctx: &Ctx, solve_dir: &Path, out: &Path) -> Result<()> {
         "curve": curve,
         "solver": solve,
         "stage_wall_time_s": {
-            "geometry": stage_time("geometry"),
-            "mesh": stage_time("mesh"),
+            "geometry": stage_time(Stage::Geometry),
+            "mesh": stage_time(Stage::Mesh),
             "solve": solve.pointer("/summary/wall_time_s/total").cloned().unwrap_or(Value::Null),
         },
     });

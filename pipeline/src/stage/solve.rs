@@ -10,7 +10,8 @@
 //! (before it), so a resumed run continues the sums and writes the same
 //! values as an uninterrupted one.
 
-use crate::stages::{Ctx, CHECKPOINT_FILE};
+use super::ctx::Ctx;
+use super::kinds::{Stage, CHECKPOINT_FILE};
 use anyhow::Result;
 use geom::spec::NonAdhesive;
 use mesh::{InterfaceZone, Model};
@@ -318,7 +319,9 @@ impl Observer for StageObserver<'_> {
     }
 }
 
-pub fn run(ctx: &Ctx, mesh_dir: &Path, out: &Path) -> Result<()> {
+pub fn run(ctx: &Ctx, out: &Path) -> Result<()> {
+    let mesh_dir = ctx.done_dir(Stage::Mesh);
+    let mesh_dir = mesh_dir.as_path();
     let model = Model::load(&mesh_dir.join(mesh::MODEL_FILE))?;
     let laws = element_laws(&model, ctx.scene)?;
     let checkpoint_path = out.join(CHECKPOINT_FILE);

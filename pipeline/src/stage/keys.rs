@@ -1,0 +1,133 @@
+//! Stage keys: a stage's key is a hash of exactly what it reads (the spec
+//! sections below, resolved; its upstream stage's key; the versions that
+//! change its result), so a stage reruns when and only when one of them
+//! changed.
+
+use super::kinds::Stage;
+use crate::scene::Scene;
+use crate::store::StageKey;
+use serde_json::{json, Map, Value};
+
+impl Stage {
+    /// Version of what the stage produces; bumped when its output for the
+    /// same inputs changes, so old artifacts are not reused.
+    fn format(self) -> u32 {
+        match self {
+            Stage::Geometry => 1,
+            Stage::Mesh => 2,
+            Stage::Solve => 9,
+            Stage::Post => 2,
+        }
+    }
+
+    /// The spec sections the stage reads (JSON pointers into the scene),
+    /// and the parts of them it does not.
+    fn reads(self) -> (&'static [&'static str], &'static [&'static str]) {
+        match self {
+            // The non-adhesive option only changes which interface law the
+            // solver puts there.
+            Stage::Geometry => (&["/bar", "/specimen"], &["/specimen/non_adhesive"]),
+            Stage::Mesh => (&["/mesh"], &[]),
+            Stage::Solve => (
+                &[
+                    "/specimen/non_adhesive",
+                    "/materials",
+                    "/loading",
+                    "/solver",
+                    "/outputs/fields",
+                ],
+                &[],
+            ),
+            Stage::Post => (&["/outputs/post"], &[]),
+        }
+    }
+
+    /// Whether gmsh's version changes the stage's result.
+    fn uses_gmsh(self) -> bool {
+        matches!(self, Stage::Geometry | Stage::Mesh)
+    }
+}
+
+/// The keys of all four stages of a scene (each depends on its upstream key).
+pub struct Keys {
+    keys: [StageKey; 4],
+}
+
+impl Keys {
+    pub fn of(scene: &Scene, gmsh_version: &str) -> Keys {
+        let resolved = serde_json::to_value(scene).expect("resolved scenes serialise");
+        let mut keys: Vec<StageKey> = Vec::with_capacity(Stage::ALL.len());
+        for stage in Stage::ALL {
+            let (reads, ignores) = stage.reads();
+            let mut inputs = select(&resolved, reads, ignores);
+            inputs.insert("format".into(), json!(stage.format()));
+            if stage.uses_gmsh() {
+                inputs.insert("gmsh".into(), json!(gmsh_version));
+            }
+            if let Some(up) = stage.upstream() {
+                inputs.insert(up.name().into(), json!(keys[up as usize].key));
+            }
+            let written = select(&scene.written, reads, ignores);
+            keys.push(
+                StageKey::new(stage.name(), Value::Object(inputs))
+                    .with_written(Value::Object(written)),
+            );
+        }
+        Keys {
+            keys: keys.try_into().expect("one key per stage"),
+        }
+    }
+
+    pub fn get(&self, stage: Stage) -> &StageKey {
+        &self.keys[stage as usize]
+    }
+}
+
+/// The parts of `tree` at the JSON pointers `reads`, without those at
+/// `ignores`, as one object with the same nesting (a section absent from
+/// `tree` is null).
+fn select(tree: &Value, reads: &[&str], ignores: &[&str]) -> Map<String, Value> {
+    let mut out = Value::Object(Map::new());
+    for pointer in reads {
+        let value = tree.pointer(pointer).cloned().unwrap_or(Value::Null);
+        *slot(&mut out, pointer) = value;
+    }
+    for pointer in ignores {
+        let (parent, last) = pointer.rsplit_once('/').expect("pointers start with /");
+        if let Some(Value::Object(map)) = out.pointer_mut(parent) {
+            map.remove(last);
+        }
+    }
+    match out {
+        Value::Object(map) => map,
+        _ => unreachable!("built as an object"),
+    }
+}
+
+/// The place of `pointer` in `tree`, creating the objects on the way.
+fn slot<'v>(tree: &'v mut Value, pointer: &str) -> &'v mut Value {
+    pointer.split('/').skip(1).fold(tree, |node, part| {
+        if !node.is_object() {
+            *node = Value::Object(Map::new());
+        }
+        let Value::Object(map) = node else {
+            unreachable!("made an object above")
+        };
+        map.entry(part.to_string()).or_insert(Value::Null)
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn select_keeps_the_nesting_and_drops_the_ignored_parts() {
+        let tree = json!({"a": {"x": 1, "y": 2}, "b": {"c": {"d": 3}, "e": 4}, "f": 5});
+        let got = select(&tree, &["/a", "/b/c", "/g"], &["/a/y"]);
+        assert_eq!(
+            Value::Object(got),
+            json!({"a": {"x": 1}, "b": {"c": {"d": 3}}, "g": null})
+        );
+    }
+}
