@@ -1,9 +1,10 @@
 //! Everything needed to restart a run from a converged step, saved
 //! atomically (bincode behind a format tag).
 
-use super::report::{CurveRow, Summary};
-use super::stepping::ControlMode;
+use super::control::ControlMode;
+use super::summary::Summary;
 use crate::assembly::States;
+use crate::curve::CurveRow;
 use crate::interface_element::INTERFACE_POINTS;
 use mesh::Model;
 use serde::{Deserialize, Serialize};

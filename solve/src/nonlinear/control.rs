@@ -30,6 +30,7 @@ use super::problem::Dirichlet;
 use crate::assembly::DofMap;
 use crate::assembly::LoadDerivatives;
 use crate::linear::{dot, LinearError, Operator, Preconditioner};
+use serde::{Deserialize, Serialize};
 
 /// A linear quantity Σ w_i u_i of the global displacement.
 #[derive(Debug, Clone, PartialEq)]
@@ -268,4 +269,17 @@ impl<M: Preconditioner> Preconditioner for BorderedPreconditioner<'_, M> {
         rl[0] = zl;
         Ok(())
     }
+}
+
+/// What the steps of a run prescribe at the moment (the unit of its step
+/// size).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub enum ControlMode {
+    /// λ, the imposed displacement.
+    #[default]
+    Displacement,
+    /// The free-end displacement (indirect displacement control).
+    FreeEnd,
+    /// The energy released by the step (dissipation control), J.
+    Energy,
 }

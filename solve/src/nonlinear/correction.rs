@@ -12,70 +12,12 @@
 //! iterations with it.
 
 use super::control::{Border, BorderedPreconditioner};
-use super::report::WallTimes;
 use super::workspace::Workspace;
-use crate::assembly::{Outputs, States, System, Tangents};
+use crate::assembly::{Outputs, States, Tangents};
 use crate::laws::TangentKind;
-use crate::linear::{gmres, pcg, Cholesky, LinearError, SplitMatrix, SymLower};
-use crate::spec::solver::{LinearSolverKind, Precision, SolverSettings};
+use crate::linear::{gmres, pcg, LinearError, SplitMatrix, SymLower};
+use crate::spec::solver::LinearSolverKind;
 use std::time::Instant;
-
-/// Linear-algebra state reused across iterations and steps.
-pub(crate) struct LinearState {
-    /// Factor of the current matrix (Cholesky mode) or of an older one
-    /// (PCG, GMRES: the preconditioner).
-    pub(crate) chol: Cholesky,
-    pub(crate) factorisations: usize,
-    pub(crate) pcg_iterations: usize,
-    pub(crate) krylov_iterations: usize,
-    /// Lower values of the matrix held in `chol` when it is kept across
-    /// iterations (PCG, GMRES preconditioner); saved in checkpoints.
-    pub(crate) preconditioner: Vec<f64>,
-    /// The preconditioner is missing or has become poor: factorise anew.
-    pub(crate) refactor: bool,
-}
-
-impl LinearState {
-    /// The symbolic analysis of `system`'s pattern (timed into `wall`).
-    pub(crate) fn new(
-        system: &System,
-        settings: &SolverSettings,
-        wall: &mut WallTimes,
-    ) -> Result<Self, LinearError> {
-        let dofs = system.dofs();
-        let mut dof_node = vec![0usize; dofs.n_free()];
-        for d in 0..dofs.n_total() {
-            if let Some(f) = dofs.free_index(d) {
-                dof_node[f] = d / 3;
-            }
-        }
-        let t = Instant::now();
-        let mut chol = Cholesky::new(
-            &system.col_ptr,
-            &system.row_idx,
-            settings.ordering,
-            &dof_node,
-        )?;
-        if settings.linear_solver == LinearSolverKind::Gmres {
-            chol.set_single_precision_preconditioner(
-                settings.preconditioner_precision == Precision::Single,
-            );
-        }
-        wall.factorisation += t.elapsed().as_secs_f64();
-        Ok(Self {
-            chol,
-            factorisations: 0,
-            pcg_iterations: 0,
-            krylov_iterations: 0,
-            preconditioner: if settings.linear_solver == LinearSolverKind::Cholesky {
-                Vec::new()
-            } else {
-                vec![0.0; system.nnz()]
-            },
-            refactor: true,
-        })
-    }
-}
 
 impl Workspace<'_> {
     /// Solves for the Newton correction `du` of the right-hand side `rhs`

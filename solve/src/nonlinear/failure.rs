@@ -1,7 +1,6 @@
 //! Why a Newton attempt failed (the step is cut back) and why a run ended
 //! early (the converged part is kept).
 
-use super::report::RunResult;
 use crate::assembly::{AssemblyError, States};
 use crate::linear::LinearError;
 
@@ -113,39 +112,4 @@ impl StepFailure {
             _ => None,
         }
     }
-}
-
-/// Why a run stopped early.
-#[derive(Debug, thiserror::Error)]
-pub enum SolveError {
-    #[error("model: {0}")]
-    Model(String),
-    #[error(transparent)]
-    Assembly(#[from] AssemblyError),
-    #[error("linear solver set-up: {0}")]
-    Linear(#[from] LinearError),
-    #[error("checkpoint does not match the model: {0}")]
-    Checkpoint(String),
-    #[error(
-        "step {step} did not converge at the minimum step size: imposed displacement {u_imposed:e} m \
-         (step {step_size:e} m); residual history {residual_history:?}; likely cause: {cause}; \
-         {} converged steps kept", partial.rows.len()
-    )]
-    Stalled {
-        step: usize,
-        u_imposed: f64,
-        step_size: f64,
-        residual_history: Vec<f64>,
-        cause: Box<StepFailure>,
-        partial: Box<RunResult>,
-    },
-    #[error(
-        "loading.max_steps = {max_steps} converged steps reached at imposed displacement \
-         {u_imposed:e} m before the end of the loading"
-    )]
-    StepLimit {
-        max_steps: usize,
-        u_imposed: f64,
-        partial: Box<RunResult>,
-    },
 }

@@ -14,13 +14,15 @@ mod newton;
 mod problem;
 mod report;
 mod stepping;
+mod summary;
 mod workspace;
 
 pub use checkpoint::{Checkpoint, CheckpointError, PreconditionerState};
-pub use failure::{RegimeChanges, SolveError, StepFailure};
+pub use control::ControlMode;
+pub use failure::{RegimeChanges, StepFailure};
 pub use problem::{Dirichlet, Measurement};
 pub use report::{
-    CommittedView, CurveRow, Cutback, Ending, Observer, RunResult, Silent, StepReport, Summary,
-    WallTimes,
+    CommittedView, CurveRow, Cutback, Ending, Observer, RunResult, Silent, SolveError, StepReport,
+    Summary, WallTimes,
 };
-pub use stepping::{run, ControlMode, Problem};
+pub use stepping::{run, Problem};

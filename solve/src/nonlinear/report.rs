@@ -1,87 +1,14 @@
-//! What a run reports: the curve rows, the summary, wall times, and the
-//! per-step events an [`Observer`] receives.
+//! What a run returns and reports while it runs: the result (or the
+//! error that keeps the converged part), and the per-step events an
+//! [`Observer`] receives.
 
 use super::checkpoint::Checkpoint;
 use super::failure::StepFailure;
-use crate::assembly::{ElementLaws, EvalTimings, States};
+pub use super::summary::{Ending, Summary, WallTimes};
+use crate::assembly::{AssemblyError, ElementLaws, States};
 pub use crate::curve::CurveRow;
+use crate::linear::LinearError;
 use mesh::Model;
-use serde::{Deserialize, Serialize};
-
-/// Wall times by phase, s.
-#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
-pub struct WallTimes {
-    pub total: f64,
-    /// Scatter into the global matrix and force vector.
-    pub assembly: f64,
-    /// Constitutive updates and element kernels.
-    pub constitutive: f64,
-    /// Numeric Cholesky factorisations (and the symbolic analysis).
-    pub factorisation: f64,
-    /// Triangular solves and conjugate gradients.
-    pub solve: f64,
-}
-
-impl WallTimes {
-    pub(crate) fn add(&mut self, o: &WallTimes) {
-        self.total += o.total;
-        self.assembly += o.assembly;
-        self.constitutive += o.constitutive;
-        self.factorisation += o.factorisation;
-        self.solve += o.solve;
-    }
-    pub(crate) fn add_eval(&mut self, e: &EvalTimings) {
-        self.assembly += e.assembly;
-        self.constitutive += e.constitutive;
-    }
-}
-
-/// Summary of a run (`summary.json`).
-#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
-pub struct Summary {
-    /// Largest σ_mb, Pa.
-    pub peak_bond_stress: f64,
-    /// FED at the peak, m.
-    pub fed_at_peak: f64,
-    /// FED at the last converged step, m.
-    pub final_fed: f64,
-    pub steps: usize,
-    pub cutbacks: usize,
-    /// Free DOFs.
-    pub dofs: usize,
-    pub total_iterations: usize,
-    pub factorisations: usize,
-    pub pcg_iterations: usize,
-    /// GMRES iterations of the Newton–Krylov solver.
-    #[serde(default)]
-    pub krylov_iterations: usize,
-    /// Steps accepted on the force criterion alone: Newton stagnated with
-    /// the residual already below `residual_tolerance` (points switching
-    /// between loading and unloading, or stick and slip, kept the energy
-    /// criterion out of reach).
-    #[serde(default)]
-    pub force_only_steps: usize,
-    /// IMPL-EX: the largest relative residual of a converged step's
-    /// displacement under the implicit damage (see
-    /// `SolverSettings::impl_ex_tolerance`); 0 for implicit integration.
-    #[serde(default)]
-    pub impl_ex_max_residual: f64,
-    /// Tets whose damage is integrated explicitly (IMPL-EX): all under
-    /// `concrete_integration: impl_ex`, else the degenerate ones
-    /// (`solver.sliver_quality`).
-    #[serde(default)]
-    pub explicit_tets: usize,
-    /// Attempts repeated with the tets whose damage switched between
-    /// growing and not between Newton iterates integrated explicitly
-    /// (their error is in `impl_ex_max_residual`).
-    #[serde(default)]
-    pub explicit_retries: usize,
-    /// Newton solves repeated after a retry to settle the damage of its
-    /// explicit tets.
-    #[serde(default)]
-    pub damage_passes: usize,
-    pub wall_time_s: WallTimes,
-}
 
 /// A finished (or partial) run.
 #[derive(Debug, Clone, PartialEq)]
@@ -92,34 +19,6 @@ pub struct RunResult {
     pub last: Checkpoint,
     /// How the run ended.
     pub ending: Ending,
-}
-
-/// How a run that returned a result ended.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(tag = "kind", rename_all = "snake_case")]
-pub enum Ending {
-    /// The loading reached its end (`u_final` or `fed_stop`).
-    Completed,
-    /// The loaded member yields over its section: no quasi-static state
-    /// carries more load, so the run ends there, its curve a result.
-    LimitLoad {
-        /// The last converged force (whole specimen), N.
-        force: f64,
-        /// σ_y times the member's section (whole specimen), N.
-        yield_force: f64,
-    },
-    /// After its peak the specimen carries less than 0.1 % of the peak
-    /// load: the cube split through or the bar pulled free, and there is
-    /// no load left to follow.
-    Unloaded {
-        /// The last converged force (whole specimen), N.
-        force: f64,
-        /// The largest |F| of the run (whole specimen), N.
-        peak_force: f64,
-        /// Concrete tets with D > 0.99 (a crack through the cube shows as
-        /// a layer of them).
-        broken_concrete_tets: usize,
-    },
 }
 
 /// Per converged step, for progress output.
@@ -174,3 +73,38 @@ pub trait Observer {
 /// An observer that ignores everything.
 pub struct Silent;
 impl Observer for Silent {}
+
+/// Why a run stopped early.
+#[derive(Debug, thiserror::Error)]
+pub enum SolveError {
+    #[error("model: {0}")]
+    Model(String),
+    #[error(transparent)]
+    Assembly(#[from] AssemblyError),
+    #[error("linear solver set-up: {0}")]
+    Linear(#[from] LinearError),
+    #[error("checkpoint does not match the model: {0}")]
+    Checkpoint(String),
+    #[error(
+        "step {step} did not converge at the minimum step size: imposed displacement {u_imposed:e} m \
+         (step {step_size:e} m); residual history {residual_history:?}; likely cause: {cause}; \
+         {} converged steps kept", partial.rows.len()
+    )]
+    Stalled {
+        step: usize,
+        u_imposed: f64,
+        step_size: f64,
+        residual_history: Vec<f64>,
+        cause: Box<StepFailure>,
+        partial: Box<RunResult>,
+    },
+    #[error(
+        "loading.max_steps = {max_steps} converged steps reached at imposed displacement \
+         {u_imposed:e} m before the end of the loading"
+    )]
+    StepLimit {
+        max_steps: usize,
+        u_imposed: f64,
+        partial: Box<RunResult>,
+    },
+}

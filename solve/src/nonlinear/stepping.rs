@@ -6,15 +6,15 @@
 //! observer after every converged step.
 
 use super::checkpoint::{Checkpoint, PreconditionerState};
-use super::control::{generalised_load, Constraint, Control, Indirect, Quantity};
-use super::correction::LinearState;
-use super::failure::{RegimeChanges, SolveError, StepFailure};
+use super::control::{generalised_load, Constraint, Control, ControlMode, Indirect, Quantity};
+use super::failure::{RegimeChanges, StepFailure};
 use super::newton::Attempt;
 use super::problem::{Dirichlet, Measurement};
 use super::report::{
-    CommittedView, CurveRow, Cutback, Ending, Observer, RunResult, StepReport, Summary, WallTimes,
+    CommittedView, CurveRow, Cutback, Ending, Observer, RunResult, SolveError, StepReport, Summary,
+    WallTimes,
 };
-use super::workspace::{reaction_norm, residual, Workspace};
+use super::workspace::{reaction_norm, residual, LinearState, Workspace};
 use crate::assembly::{
     AssemblyError, ElementLaws, LoadDerivatives, Outputs, States, System, Tangents,
 };
@@ -24,7 +24,6 @@ use crate::spec::solver::{
     ConcreteIntegration, LinearSolverKind, Loading, PathFollowing, Predictor, SolverSettings,
 };
 use mesh::Model;
-use serde::{Deserialize, Serialize};
 use std::time::Instant;
 
 /// The problem a run solves: the model with its laws, the Dirichlet
@@ -39,19 +38,6 @@ pub struct Problem<'a> {
     /// yields over its section, if its law has a yield limit: a run that
     /// stalls there ends at this limit load instead of failing.
     pub yield_force: Option<f64>,
-}
-
-/// What the steps of a run prescribe at the moment (the unit of its step
-/// size).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
-pub enum ControlMode {
-    /// λ, the imposed displacement.
-    #[default]
-    Displacement,
-    /// The free-end displacement (indirect displacement control).
-    FreeEnd,
-    /// The energy released by the step (dissipation control), J.
-    Energy,
 }
 
 /// A step dissipates when the energy it releases exceeds this fraction of

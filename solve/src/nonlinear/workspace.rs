@@ -2,12 +2,13 @@
 //! the internal forces and tangent values of the current iterate, the kept
 //! linear-solver state and the wall times of the current step.
 
-use super::correction::LinearState;
-use super::report::WallTimes;
+use super::summary::WallTimes;
 use crate::assembly::{
     AssemblyError, DofMap, ElementLaws, LoadDerivatives, Outputs, States, System, Tangents,
 };
-use crate::spec::solver::SolverSettings;
+use crate::linear::{Cholesky, LinearError};
+use crate::spec::solver::{LinearSolverKind, Precision, SolverSettings};
+use std::time::Instant;
 
 pub(crate) struct Workspace<'a> {
     pub(crate) system: &'a System,
@@ -87,4 +88,61 @@ pub(crate) fn reaction_norm(system: &System, f_int: &[f64]) -> f64 {
         .map(|d| f_int[d] * f_int[d])
         .sum::<f64>()
         .sqrt()
+}
+
+/// Linear-algebra state reused across iterations and steps.
+pub(crate) struct LinearState {
+    /// Factor of the current matrix (Cholesky mode) or of an older one
+    /// (PCG, GMRES: the preconditioner).
+    pub(crate) chol: Cholesky,
+    pub(crate) factorisations: usize,
+    pub(crate) pcg_iterations: usize,
+    pub(crate) krylov_iterations: usize,
+    /// Lower values of the matrix held in `chol` when it is kept across
+    /// iterations (PCG, GMRES preconditioner); saved in checkpoints.
+    pub(crate) preconditioner: Vec<f64>,
+    /// The preconditioner is missing or has become poor: factorise anew.
+    pub(crate) refactor: bool,
+}
+
+impl LinearState {
+    /// The symbolic analysis of `system`'s pattern (timed into `wall`).
+    pub(crate) fn new(
+        system: &System,
+        settings: &SolverSettings,
+        wall: &mut WallTimes,
+    ) -> Result<Self, LinearError> {
+        let dofs = system.dofs();
+        let mut dof_node = vec![0usize; dofs.n_free()];
+        for d in 0..dofs.n_total() {
+            if let Some(f) = dofs.free_index(d) {
+                dof_node[f] = d / 3;
+            }
+        }
+        let t = Instant::now();
+        let mut chol = Cholesky::new(
+            &system.col_ptr,
+            &system.row_idx,
+            settings.ordering,
+            &dof_node,
+        )?;
+        if settings.linear_solver == LinearSolverKind::Gmres {
+            chol.set_single_precision_preconditioner(
+                settings.preconditioner_precision == Precision::Single,
+            );
+        }
+        wall.factorisation += t.elapsed().as_secs_f64();
+        Ok(Self {
+            chol,
+            factorisations: 0,
+            pcg_iterations: 0,
+            krylov_iterations: 0,
+            preconditioner: if settings.linear_solver == LinearSolverKind::Cholesky {
+                Vec::new()
+            } else {
+                vec![0.0; system.nnz()]
+            },
+            refactor: true,
+        })
+    }
 }
