@@ -380,34 +380,8 @@ impl System {
         load_rates: &[(usize, f64)],
         active_interfaces: &[bool],
     ) -> Result<Self, AssemblyError> {
-        let n_nodes = model.nodes.len();
-        if model.tet_region.len() != model.tets.len() {
-            return Err(AssemblyError::Model(format!(
-                "{} tets but {} tet regions",
-                model.tets.len(),
-                model.tet_region.len()
-            )));
-        }
-        for (i, t) in model.tets.iter().enumerate() {
-            if t.iter().any(|&n| n as usize >= n_nodes) {
-                return Err(AssemblyError::Model(format!(
-                    "tet {i} references a node ≥ {n_nodes}"
-                )));
-            }
-        }
-        for (i, e) in model.interfaces.iter().enumerate() {
-            if e.nodes.iter().any(|&n| n as usize >= n_nodes) {
-                return Err(AssemblyError::Model(format!(
-                    "interface element {i} references a node ≥ {n_nodes}"
-                )));
-            }
-        }
-        if active_interfaces.len() != model.interfaces.len() {
-            return Err(AssemblyError::Model(
-                "one activity flag per interface element expected".into(),
-            ));
-        }
-        let dofs = DofMap::new(n_nodes, constrained);
+        check_model(model, active_interfaces)?;
+        let dofs = DofMap::new(model.nodes.len(), constrained);
         let tet_geom = model
             .tets
             .par_iter()
@@ -420,152 +394,9 @@ impl System {
         let iface_active: Vec<usize> = (0..model.interfaces.len())
             .filter(|&i| active_interfaces[i])
             .collect();
-
-        // Node graph (lower: neighbour ≥ node), from tets and node pairs.
-        let mut adj: Vec<Vec<u32>> = vec![Vec::new(); n_nodes];
-        for t in &model.tets {
-            for &a in t {
-                for &b in t {
-                    if a >= b {
-                        adj[b as usize].push(a);
-                    }
-                }
-            }
-        }
-        for &i in &iface_active {
-            let n = &model.interfaces[i].nodes;
-            for p in 0..3 {
-                for (a, b) in [(n[p], n[p]), (n[p + 3], n[p + 3]), (n[p], n[p + 3])] {
-                    let (hi, lo) = if a >= b { (a, b) } else { (b, a) };
-                    adj[lo as usize].push(hi);
-                }
-            }
-        }
-        adj.par_iter_mut().for_each(|v| {
-            v.sort_unstable();
-            v.dedup();
-        });
-        let mut col_ptr = Vec::with_capacity(dofs.n_free + 1);
-        let mut row_idx = Vec::new();
-        col_ptr.push(0);
-        for (b, nbrs) in adj.iter().enumerate() {
-            for cb in 0..3 {
-                let Some(j) = dofs.free_index(3 * b + cb) else {
-                    continue;
-                };
-                for &a in nbrs {
-                    for ca in 0..3 {
-                        if let Some(i) = dofs.free_index(3 * a as usize + ca) {
-                            if i >= j {
-                                row_idx.push(i);
-                            }
-                        }
-                    }
-                }
-                col_ptr.push(row_idx.len());
-            }
-        }
-        if row_idx.len() >= POS as usize {
-            return Err(AssemblyError::Model(
-                "too many matrix entries for 32-bit scatter maps".into(),
-            ));
-        }
-        let position = |gi: usize, gj: usize| -> u32 {
-            match (dofs.free_index(gi), dofs.free_index(gj)) {
-                (Some(i), Some(j)) => {
-                    let (r, c, flag) = if i >= j { (i, j, 0) } else { (j, i, SWAP) };
-                    let col = &row_idx[col_ptr[c]..col_ptr[c + 1]];
-                    let k = col
-                        .binary_search(&r)
-                        .expect("pattern holds every element entry");
-                    (col_ptr[c] + k) as u32 | flag
-                }
-                _ => NONE,
-            }
-        };
-        let tet_map = model
-            .tets
-            .par_iter()
-            .map(|t| {
-                let d = tet_dofs(t);
-                let mut m = [NONE; TET_LOWER];
-                let mut k = 0;
-                for a in 0..12 {
-                    for b in 0..=a {
-                        m[k] = position(d[a], d[b]);
-                        k += 1;
-                    }
-                }
-                m
-            })
-            .collect();
-        let iface_map = iface_active
-            .iter()
-            .map(|&i| {
-                let nodes = &model.interfaces[i].nodes;
-                std::array::from_fn(|p| {
-                    let d = pair_dofs(nodes, p);
-                    let mut m = [NONE; PAIR_LOWER];
-                    let mut k = 0;
-                    for a in 0..6 {
-                        for b in 0..=a {
-                            m[k] = position(d[a], d[b]);
-                            k += 1;
-                        }
-                    }
-                    m
-                })
-            })
-            .collect();
-        let mut rate = vec![0.0; 3 * n_nodes];
-        for &(d, r) in load_rates {
-            if d >= rate.len() || dofs.free_index(d).is_some() {
-                return Err(AssemblyError::Model(format!(
-                    "load rate on DOF {d}, which is not a constrained DOF of the model"
-                )));
-            }
-            rate[d] = r;
-        }
-        let couplings = |element: usize, point: usize, d: &[usize]| {
-            let mut out = Vec::new();
-            for (a, &da) in d.iter().enumerate() {
-                for (b, &db) in d.iter().enumerate() {
-                    let (kind, free, weight) = match (dofs.free_index(da), dofs.free_index(db)) {
-                        (Some(fa), None) if rate[db] != 0.0 => (CouplingKind::Column, fa, rate[db]),
-                        (None, Some(fb)) if rate[da] != 0.0 => (CouplingKind::Row, fb, rate[da]),
-                        (None, None) if rate[da] != 0.0 && rate[db] != 0.0 => {
-                            (CouplingKind::Diagonal, 0, rate[da] * rate[db])
-                        }
-                        _ => continue,
-                    };
-                    out.push(LoadCoupling {
-                        element: element as u32,
-                        point: point as u8,
-                        row: a as u8,
-                        col: b as u8,
-                        kind,
-                        free: free as u32,
-                        weight,
-                    });
-                }
-            }
-            out
-        };
-        let tet_load = model
-            .tets
-            .iter()
-            .enumerate()
-            .flat_map(|(i, t)| couplings(i, 0, &tet_dofs(t)))
-            .collect();
-        let pair_load = iface_active
-            .iter()
-            .enumerate()
-            .flat_map(|(slot, &i)| {
-                (0..INTERFACE_POINTS)
-                    .flat_map(|p| couplings(slot, p, &pair_dofs(&model.interfaces[i].nodes, p)))
-                    .collect::<Vec<_>>()
-            })
-            .collect();
+        let (col_ptr, row_idx) = lower_pattern(model, &dofs, &iface_active)?;
+        let (tet_map, iface_map) = scatter_maps(model, &dofs, &iface_active, &col_ptr, &row_idx);
+        let (tet_load, pair_load) = load_couplings(model, &dofs, &iface_active, load_rates)?;
         Ok(Self {
             tet_load,
             pair_load,
@@ -604,35 +435,50 @@ impl System {
         start: &States,
         trial: &mut States,
         tangents: Tangents,
-        out: Outputs<'_>,
+        mut out: Outputs<'_>,
     ) -> Result<EvalTimings, AssemblyError> {
-        let committed = start;
-        let Outputs {
-            f_int,
-            lower: mut matrix,
-            mut upper,
-            mut load,
-        } = out;
-        if load.is_some() && matrix.is_none() {
+        if out.load.is_some() && out.lower.is_none() {
             return Err(AssemblyError::Model(
                 "the load derivatives need the element matrices: ask for the matrix too".into(),
             ));
         }
-        if let Some(l) = load.as_deref_mut() {
+        if let Some(l) = out.load.as_deref_mut() {
             l.clear();
         }
-        let (bulk_kind, iface_kind) = (tangents.bulk, tangents.interface);
+        out.f_int.iter_mut().for_each(|v| *v = 0.0);
+        if let Some(m) = out.lower.as_deref_mut() {
+            m.iter_mut().for_each(|v| *v = 0.0);
+        }
+        if let Some(m) = out.upper.as_deref_mut() {
+            m.iter_mut().for_each(|v| *v = 0.0);
+        }
+        let input = Input {
+            laws,
+            u,
+            committed: start,
+        };
         let mut timings = EvalTimings::default();
-        f_int.iter_mut().for_each(|v| *v = 0.0);
-        if let Some(m) = matrix.as_deref_mut() {
-            m.iter_mut().for_each(|v| *v = 0.0);
-        }
-        if let Some(m) = upper.as_deref_mut() {
-            m.iter_mut().for_each(|v| *v = 0.0);
-        }
-        let want_k = matrix.is_some();
+        self.evaluate_tets(&input, tangents.bulk, trial, &mut out, &mut timings)?;
+        self.evaluate_interfaces(&input, tangents.interface, trial, &mut out, &mut timings)?;
+        Ok(timings)
+    }
 
-        // Tets, block by block: parallel kernels into buffers, serial scatter.
+    /// The tets' part of [`System::evaluate`], block by block: parallel
+    /// kernels into buffers, serial scatter.
+    fn evaluate_tets(
+        &self,
+        input: &Input<'_>,
+        bulk_kind: TangentKind,
+        trial: &mut States,
+        out: &mut Outputs<'_>,
+        timings: &mut EvalTimings,
+    ) -> Result<(), AssemblyError> {
+        let Input { laws, u, committed } = *input;
+        let want_k = out.lower.is_some();
+        let f_int = &mut *out.f_int;
+        let mut matrix = out.lower.as_deref_mut();
+        let mut upper = out.upper.as_deref_mut();
+        let mut load = out.load.as_deref_mut();
         let mut fbuf = vec![[0.0f64; 12]; BLOCK.min(self.tets.len())];
         let mut kbuf = vec![[0.0f64; 144]; if want_k { fbuf.len() } else { 0 }];
         let n_tets = self.tets.len();
@@ -719,7 +565,25 @@ impl System {
             start = end;
         }
 
-        // Interfaces: few compared with tets; one parallel pass.
+        Ok(())
+    }
+
+    /// The interface elements' part of [`System::evaluate`]: few compared
+    /// with tets, one parallel pass.
+    fn evaluate_interfaces(
+        &self,
+        input: &Input<'_>,
+        iface_kind: TangentKind,
+        trial: &mut States,
+        out: &mut Outputs<'_>,
+        timings: &mut EvalTimings,
+    ) -> Result<(), AssemblyError> {
+        let Input { laws, u, committed } = *input;
+        let want_k = out.lower.is_some();
+        let f_int = &mut *out.f_int;
+        let mut matrix = out.lower.as_deref_mut();
+        let mut upper = out.upper.as_deref_mut();
+        let load = out.load.as_deref_mut();
         let t0 = Instant::now();
         type PairOut = ([f64; 18], [[f64; 36]; INTERFACE_POINTS]);
         let results: Vec<(usize, [InterfaceState; INTERFACE_POINTS], PairOut)> = self
@@ -791,8 +655,234 @@ impl System {
             }
         }
         timings.assembly += t1.elapsed().as_secs_f64();
-        Ok(timings)
+        Ok(())
     }
+}
+
+/// What the element kernels read in one evaluation.
+#[derive(Clone, Copy)]
+struct Input<'a> {
+    laws: &'a ElementLaws,
+    u: &'a [f64],
+    committed: &'a States,
+}
+
+/// Refuses a model whose elements reference missing nodes or whose
+/// interface activity flags do not match its interface elements.
+fn check_model(model: &Model, active_interfaces: &[bool]) -> Result<(), AssemblyError> {
+    let n_nodes = model.nodes.len();
+    if model.tet_region.len() != model.tets.len() {
+        return Err(AssemblyError::Model(format!(
+            "{} tets but {} tet regions",
+            model.tets.len(),
+            model.tet_region.len()
+        )));
+    }
+    for (i, t) in model.tets.iter().enumerate() {
+        if t.iter().any(|&n| n as usize >= n_nodes) {
+            return Err(AssemblyError::Model(format!(
+                "tet {i} references a node ≥ {n_nodes}"
+            )));
+        }
+    }
+    for (i, e) in model.interfaces.iter().enumerate() {
+        if e.nodes.iter().any(|&n| n as usize >= n_nodes) {
+            return Err(AssemblyError::Model(format!(
+                "interface element {i} references a node ≥ {n_nodes}"
+            )));
+        }
+    }
+    if active_interfaces.len() != model.interfaces.len() {
+        return Err(AssemblyError::Model(
+            "one activity flag per interface element expected".into(),
+        ));
+    }
+    Ok(())
+}
+
+/// The lower-triangle CSC pattern (column pointers, row indices) of the
+/// free DOFs coupled by the tets and the active interface node pairs.
+fn lower_pattern(
+    model: &Model,
+    dofs: &DofMap,
+    iface_active: &[usize],
+) -> Result<(Vec<usize>, Vec<usize>), AssemblyError> {
+    let n_nodes = model.nodes.len();
+    // Node graph (lower: neighbour ≥ node), from tets and node pairs.
+    let mut adj: Vec<Vec<u32>> = vec![Vec::new(); n_nodes];
+    for t in &model.tets {
+        for &a in t {
+            for &b in t {
+                if a >= b {
+                    adj[b as usize].push(a);
+                }
+            }
+        }
+    }
+    for &i in iface_active {
+        let n = &model.interfaces[i].nodes;
+        for p in 0..3 {
+            for (a, b) in [(n[p], n[p]), (n[p + 3], n[p + 3]), (n[p], n[p + 3])] {
+                let (hi, lo) = if a >= b { (a, b) } else { (b, a) };
+                adj[lo as usize].push(hi);
+            }
+        }
+    }
+    adj.par_iter_mut().for_each(|v| {
+        v.sort_unstable();
+        v.dedup();
+    });
+    let mut col_ptr = Vec::with_capacity(dofs.n_free + 1);
+    let mut row_idx = Vec::new();
+    col_ptr.push(0);
+    for (b, nbrs) in adj.iter().enumerate() {
+        for cb in 0..3 {
+            let Some(j) = dofs.free_index(3 * b + cb) else {
+                continue;
+            };
+            for &a in nbrs {
+                for ca in 0..3 {
+                    if let Some(i) = dofs.free_index(3 * a as usize + ca) {
+                        if i >= j {
+                            row_idx.push(i);
+                        }
+                    }
+                }
+            }
+            col_ptr.push(row_idx.len());
+        }
+    }
+    if row_idx.len() >= POS as usize {
+        return Err(AssemblyError::Model(
+            "too many matrix entries for 32-bit scatter maps".into(),
+        ));
+    }
+    Ok((col_ptr, row_idx))
+}
+
+/// Lower-triangle entries of each element matrix (per tet; per active
+/// interface element and node pair) as positions in the pattern.
+type ScatterMaps = (
+    Vec<[u32; TET_LOWER]>,
+    Vec<[[u32; PAIR_LOWER]; INTERFACE_POINTS]>,
+);
+
+fn scatter_maps(
+    model: &Model,
+    dofs: &DofMap,
+    iface_active: &[usize],
+    col_ptr: &[usize],
+    row_idx: &[usize],
+) -> ScatterMaps {
+    let position = |gi: usize, gj: usize| -> u32 {
+        match (dofs.free_index(gi), dofs.free_index(gj)) {
+            (Some(i), Some(j)) => {
+                let (r, c, flag) = if i >= j { (i, j, 0) } else { (j, i, SWAP) };
+                let col = &row_idx[col_ptr[c]..col_ptr[c + 1]];
+                let k = col
+                    .binary_search(&r)
+                    .expect("pattern holds every element entry");
+                (col_ptr[c] + k) as u32 | flag
+            }
+            _ => NONE,
+        }
+    };
+    let tet_map = model
+        .tets
+        .par_iter()
+        .map(|t| {
+            let d = tet_dofs(t);
+            let mut m = [NONE; TET_LOWER];
+            let mut k = 0;
+            for a in 0..12 {
+                for b in 0..=a {
+                    m[k] = position(d[a], d[b]);
+                    k += 1;
+                }
+            }
+            m
+        })
+        .collect();
+    let iface_map = iface_active
+        .iter()
+        .map(|&i| {
+            let nodes = &model.interfaces[i].nodes;
+            std::array::from_fn(|p| {
+                let d = pair_dofs(nodes, p);
+                let mut m = [NONE; PAIR_LOWER];
+                let mut k = 0;
+                for a in 0..6 {
+                    for b in 0..=a {
+                        m[k] = position(d[a], d[b]);
+                        k += 1;
+                    }
+                }
+                m
+            })
+        })
+        .collect();
+    (tet_map, iface_map)
+}
+
+/// The element matrix entries that couple the load factor to the system
+/// (see [`LoadCoupling`]): per tet, and per active interface node pair.
+fn load_couplings(
+    model: &Model,
+    dofs: &DofMap,
+    iface_active: &[usize],
+    load_rates: &[(usize, f64)],
+) -> Result<(Vec<LoadCoupling>, Vec<LoadCoupling>), AssemblyError> {
+    let n_nodes = model.nodes.len();
+    let mut rate = vec![0.0; 3 * n_nodes];
+    for &(d, r) in load_rates {
+        if d >= rate.len() || dofs.free_index(d).is_some() {
+            return Err(AssemblyError::Model(format!(
+                "load rate on DOF {d}, which is not a constrained DOF of the model"
+            )));
+        }
+        rate[d] = r;
+    }
+    let couplings = |element: usize, point: usize, d: &[usize]| {
+        let mut out = Vec::new();
+        for (a, &da) in d.iter().enumerate() {
+            for (b, &db) in d.iter().enumerate() {
+                let (kind, free, weight) = match (dofs.free_index(da), dofs.free_index(db)) {
+                    (Some(fa), None) if rate[db] != 0.0 => (CouplingKind::Column, fa, rate[db]),
+                    (None, Some(fb)) if rate[da] != 0.0 => (CouplingKind::Row, fb, rate[da]),
+                    (None, None) if rate[da] != 0.0 && rate[db] != 0.0 => {
+                        (CouplingKind::Diagonal, 0, rate[da] * rate[db])
+                    }
+                    _ => continue,
+                };
+                out.push(LoadCoupling {
+                    element: element as u32,
+                    point: point as u8,
+                    row: a as u8,
+                    col: b as u8,
+                    kind,
+                    free: free as u32,
+                    weight,
+                });
+            }
+        }
+        out
+    };
+    let tet_load = model
+        .tets
+        .iter()
+        .enumerate()
+        .flat_map(|(i, t)| couplings(i, 0, &tet_dofs(t)))
+        .collect();
+    let pair_load = iface_active
+        .iter()
+        .enumerate()
+        .flat_map(|(slot, &i)| {
+            (0..INTERFACE_POINTS)
+                .flat_map(|p| couplings(slot, p, &pair_dofs(&model.interfaces[i].nodes, p)))
+                .collect::<Vec<_>>()
+        })
+        .collect();
+    Ok((tet_load, pair_load))
 }
 
 /// Adds a row-major N×N element matrix `k` into the global lower values
