@@ -13,16 +13,16 @@
 use super::ctx::Ctx;
 use super::kinds::{Stage, CHECKPOINT_FILE};
 use anyhow::Result;
-use geom::spec::NonAdhesive;
 use mesh::{InterfaceZone, Model};
-use solve::assembly::{ElementLaws, SharedBulkLaw, SharedInterfaceLaw};
+use solve::assembly::ElementLaws;
 use solve::energy::{EnergyRow, EnergyStart, EnergyTracker, ENERGY_TOLERANCE};
 use solve::interface_element::{InterfaceKernel, INTERFACE_POINTS};
 use solve::laws::{InterfaceLaw, TangentKind};
-use solve::nonlinear::{Checkpoint, CommittedView, Cutback, Observer, SolveError, StepReport};
+use solve::nonlinear::{
+    Checkpoint, CommittedView, Cutback, Observer, RunResult, SolveError, StepReport,
+};
 use std::io::Write;
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 /// A checkpoint is written after a converged step once the time since the
@@ -31,37 +31,13 @@ use std::time::{Duration, Instant};
 /// resumed run repeats little work (every step on small models).
 const CHECKPOINT_COST_RATIO: u32 = 20;
 
+/// Columns of `interface_profile.csv`: step, FED (m), z (m), mean normal
+/// and shear traction (Pa) of the adhesive interface in an axial bin.
+const PROFILE_HEADER: &str = "step,fed,z,normal,shear";
+
 /// The energy rows up to the last checkpoint (JSON list of [`EnergyRow`]),
 /// in the in-progress directory; removed when the stage completes.
 const ENERGY_RECORD_FILE: &str = "energy_record.json";
-
-pub fn element_laws(model: &Model, scene: &crate::scene::Scene) -> Result<ElementLaws> {
-    let materials = &scene.materials;
-    let steel: SharedBulkLaw = Arc::new(materials.steel.law());
-    let adhesive: SharedInterfaceLaw = Arc::new(materials.interface.law);
-    let free: Option<SharedInterfaceLaw> = match scene.specimen.non_adhesive {
-        NonAdhesive::Free => None,
-        NonAdhesive::Contact => Some(Arc::new(materials.interface.contact_law())),
-    };
-    ElementLaws::sized(
-        model,
-        |l| {
-            materials
-                .concrete
-                .at_size(l)
-                .map(|law| Arc::new(law) as SharedBulkLaw)
-        },
-        steel,
-        adhesive,
-        free,
-    )
-    .map_err(|(tet, e)| {
-        anyhow::anyhow!(
-            "materials.concrete: concrete tet {tet} (size l = {:.3} mm): {e}",
-            model.tet_size.get(tet).copied().unwrap_or(f64::NAN) * 1e3
-        )
-    })
-}
 
 /// Mean interface tractions in axial bins along the adhesive zone, for the
 /// paper's Fig. 12 style profile: (z, t_n, t_t) per bin with elements.
@@ -143,7 +119,7 @@ fn merge_peak_profile(profile: &Path) -> Result<()> {
     };
     let text = std::fs::read_to_string(profile)?;
     let mut lines = text.lines();
-    let header = lines.next().unwrap_or("step,fed,z,normal,shear");
+    let header = lines.next().unwrap_or(PROFILE_HEADER);
     let step = |l: &&str| {
         l.split(',')
             .next()
@@ -323,58 +299,16 @@ pub fn run(ctx: &Ctx, out: &Path) -> Result<()> {
     let mesh_dir = ctx.done_dir(Stage::Mesh);
     let mesh_dir = mesh_dir.as_path();
     let model = Model::load(&mesh_dir.join(mesh::MODEL_FILE))?;
-    let laws = element_laws(&model, ctx.scene)?;
+    let laws = ctx
+        .scene
+        .materials
+        .element_laws(&model, ctx.scene.specimen.non_adhesive)?;
     let checkpoint_path = out.join(CHECKPOINT_FILE);
-    let checkpoint = if checkpoint_path.is_file() {
-        match Checkpoint::load(&checkpoint_path) {
-            Ok(cp) => {
-                ctx.printer.line(&format!(
-                    "solve: resuming after step {} (u = {:.4} mm)",
-                    cp.rows.len(),
-                    cp.u_imposed * 1e3
-                ));
-                Some(cp)
-            }
-            Err(e) => {
-                ctx.printer.line(&format!(
-                    "solve: ignoring the unusable checkpoint ({e}); starting over"
-                ));
-                None
-            }
-        }
-    } else {
-        None
-    };
-    // Profiles of steps after the checkpoint are recomputed: drop them.
+    let checkpoint = load_checkpoint(ctx, &checkpoint_path);
     let resumed_steps = checkpoint.as_ref().map_or(0, |cp| cp.rows.len());
-    let (peak_so_far, peak_passed) = match checkpoint.as_ref().filter(|cp| !cp.rows.is_empty()) {
-        Some(cp) => {
-            let (first, _, step) = crate::post::first_peak_bond_stress(&cp.rows)?;
-            (
-                first,
-                step < cp.rows.len()
-                    && cp
-                        .rows
-                        .iter()
-                        .any(|r| r.bond_stress < (1.0 - crate::post::FIRST_PEAK_DROP) * first),
-            )
-        }
-        None => (f64::NEG_INFINITY, false),
-    };
+    let (peak_so_far, peak_passed) = peak_before(checkpoint.as_ref())?;
     let profile_path = out.join("interface_profile.csv");
-    let mut profile = b"step,fed,z,normal,shear\n".to_vec();
-    if resumed_steps > 0 {
-        if let Ok(old) = std::fs::read_to_string(&profile_path) {
-            for line in old.lines().skip(1) {
-                let step: Option<usize> = line.split(',').next().and_then(|s| s.parse().ok());
-                if step.is_some_and(|s| s <= resumed_steps) {
-                    profile.extend_from_slice(line.as_bytes());
-                    profile.push(b'\n');
-                }
-            }
-        }
-    }
-    crate::store::write_atomic(&profile_path, &profile)?;
+    restart_profile(&profile_path, resumed_steps)?;
     let energy_path = out.join(ENERGY_RECORD_FILE);
     let energy = match &checkpoint {
         None => EnergyTracker::new(&model, &laws).map_err(|e| e.to_string()),
@@ -407,104 +341,18 @@ pub fn run(ctx: &Ctx, out: &Path) -> Result<()> {
     if let Some(e) = observer.error.take() {
         return Err(e.context("writing solve outputs"));
     }
-    let (result, stopped) = match outcome {
-        Ok(result) => (result, None),
-        Err(SolveError::Stalled {
-            partial,
-            step,
-            u_imposed,
-            residual_history,
-            cause,
-            step_size,
-        }) => {
-            let why = format!(
-                "step {step} did not converge at the minimum step size {step_size:e} m (imposed u = {u_imposed:e} m); \
-                 residual history {residual_history:?}; likely cause: {cause}"
-            );
-            (*partial, Some(why))
-        }
-        Err(SolveError::StepLimit {
-            max_steps,
-            u_imposed,
-            partial,
-        }) => {
-            let why = format!(
-                "loading.max_steps = {max_steps} converged steps reached at imposed u = {u_imposed:e} m"
-            );
-            (*partial, Some(why))
-        }
-        Err(e) => return Err(e.into()),
-    };
+    let (result, stopped) = split_outcome(outcome)?;
     if ctx.scene.outputs.fields.at_end {
-        let last = result.rows.last().copied();
-        if let Some(row) = last {
-            let cp = &result.last;
-            let view = CommittedView {
-                model: &model,
-                laws: &laws,
-                checkpoint: &|| cp.clone(),
-                u: &cp.u,
-                states: &cp.states,
-            };
-            let report = StepReport {
-                row,
-                step_size: 0.0,
-                times: Default::default(),
-                residual_history: Vec::new(),
-                force_only: false,
-                impl_ex_residual: None,
-            };
-            observer.write_fields("end", &report, &view)?;
-        }
+        write_end_fields(&mut observer, &model, &laws, &result)?;
     }
     merge_peak_profile(&observer.profile_path)?;
     let energy_rows = observer.energy.as_ref().ok().map(|t| t.rows().to_vec());
-    let energy_check = match (&observer.energy, &energy_rows) {
-        (Ok(_), Some(rows)) if rows.len() == result.rows.len() => {
-            let check = solve::energy::check(rows, ENERGY_TOLERANCE);
-            if !check.passed {
-                ctx.printer.line(&format!(
-                    "solve: energy check failed: imbalance {:.3e} (step {}), smallest dissipation increment {:.3e} (tolerance {:.0e} of W_ext)",
-                    check.max_relative_imbalance, check.step_of_max_imbalance, check.min_dissipation_increment, check.tolerance
-                ));
-            }
-            let mut v = serde_json::to_value(&check)?;
-            v["available"] = true.into();
-            v["final"] = serde_json::to_value(rows.last())?;
-            v
-        }
-        (Err(why), _) => serde_json::json!({"available": false, "reason": why}),
-        _ => {
-            serde_json::json!({"available": false, "reason": "energy rows do not match the curve"})
-        }
-    };
+    let energy_check = energy_check_json(ctx, &observer.energy, energy_rows.as_deref(), &result)?;
     crate::store::write_atomic(
         &out.join("curve.csv"),
         solve::curve::write_curve_csv(&result.rows, energy_rows.as_deref()).as_bytes(),
     )?;
-    match result.ending {
-        solve::nonlinear::Ending::Completed => {}
-        solve::nonlinear::Ending::LimitLoad { force, yield_force } => {
-            ctx.printer.line(&format!(
-                "solve: ended at a limit load: the bar yields over its section at F = {:.1} N \
-                 ({:.0} % of σ_y A = {:.1} N); the bond sees no more load",
-                force,
-                100.0 * force / yield_force,
-                yield_force
-            ));
-        }
-        solve::nonlinear::Ending::Unloaded {
-            force,
-            peak_force,
-            broken_concrete_tets,
-        } => {
-            ctx.printer.line(&format!(
-                "solve: ended unloaded: F = {force:.3e} N after a peak of {peak_force:.1} N \
-                 (the cube split through or the bar pulled free; {broken_concrete_tets} \
-                 concrete tets with D > 0.99)"
-            ));
-        }
-    }
+    report_ending(ctx, &result.ending);
     let solve_json = serde_json::json!({
         "summary": result.summary,
         "completed": stopped.is_none(),
@@ -526,6 +374,190 @@ pub fn run(ctx: &Ctx, out: &Path) -> Result<()> {
         ctx.printer.line(&format!("solve: stopped early: {why}"));
     }
     Ok(())
+}
+
+/// The in-progress checkpoint, if there is a usable one.
+fn load_checkpoint(ctx: &Ctx, checkpoint_path: &Path) -> Option<Checkpoint> {
+    if checkpoint_path.is_file() {
+        match Checkpoint::load(checkpoint_path) {
+            Ok(cp) => {
+                ctx.printer.line(&format!(
+                    "solve: resuming after step {} (u = {:.4} mm)",
+                    cp.rows.len(),
+                    cp.u_imposed * 1e3
+                ));
+                Some(cp)
+            }
+            Err(e) => {
+                ctx.printer.line(&format!(
+                    "solve: ignoring the unusable checkpoint ({e}); starting over"
+                ));
+                None
+            }
+        }
+    } else {
+        None
+    }
+}
+
+/// The first peak of a resumed run's converged steps and whether the
+/// curve has already dropped past it (the peak fields are then written).
+fn peak_before(checkpoint: Option<&Checkpoint>) -> Result<(f64, bool)> {
+    Ok(match checkpoint.filter(|cp| !cp.rows.is_empty()) {
+        Some(cp) => {
+            let (first, _, step) = crate::post::first_peak_bond_stress(&cp.rows)?;
+            (
+                first,
+                step < cp.rows.len()
+                    && cp
+                        .rows
+                        .iter()
+                        .any(|r| r.bond_stress < (1.0 - crate::post::FIRST_PEAK_DROP) * first),
+            )
+        }
+        None => (f64::NEG_INFINITY, false),
+    })
+}
+
+/// Starts the interface profile file anew, keeping the rows of the steps
+/// up to the checkpoint (later steps are recomputed).
+fn restart_profile(profile_path: &Path, resumed_steps: usize) -> Result<()> {
+    let mut profile = format!("{PROFILE_HEADER}\n").into_bytes();
+    if resumed_steps > 0 {
+        if let Ok(old) = std::fs::read_to_string(profile_path) {
+            for line in old.lines().skip(1) {
+                let step: Option<usize> = line.split(',').next().and_then(|s| s.parse().ok());
+                if step.is_some_and(|s| s <= resumed_steps) {
+                    profile.extend_from_slice(line.as_bytes());
+                    profile.push(b'\n');
+                }
+            }
+        }
+    }
+    crate::store::write_atomic(profile_path, &profile)?;
+    Ok(())
+}
+
+/// The converged steps of a run and, when it stopped early, why: a stall
+/// or the step limit keep their converged part as a result.
+fn split_outcome(
+    outcome: std::result::Result<RunResult, SolveError>,
+) -> Result<(RunResult, Option<String>)> {
+    Ok(match outcome {
+        Ok(result) => (result, None),
+        Err(SolveError::Stalled {
+            partial,
+            step,
+            u_imposed,
+            residual_history,
+            cause,
+            step_size,
+        }) => {
+            let why = format!(
+            "step {step} did not converge at the minimum step size {step_size:e} m (imposed u = {u_imposed:e} m); \
+             residual history {residual_history:?}; likely cause: {cause}"
+        );
+            (*partial, Some(why))
+        }
+        Err(SolveError::StepLimit {
+            max_steps,
+            u_imposed,
+            partial,
+        }) => {
+            let why = format!(
+            "loading.max_steps = {max_steps} converged steps reached at imposed u = {u_imposed:e} m"
+        );
+            (*partial, Some(why))
+        }
+        Err(e) => return Err(e.into()),
+    })
+}
+
+/// The fields of the last converged step (`fields/end_*`).
+fn write_end_fields(
+    observer: &mut StageObserver<'_>,
+    model: &Model,
+    laws: &ElementLaws,
+    result: &RunResult,
+) -> Result<()> {
+    let last = result.rows.last().copied();
+    if let Some(row) = last {
+        let cp = &result.last;
+        let view = CommittedView {
+            model,
+            laws,
+            checkpoint: &|| cp.clone(),
+            u: &cp.u,
+            states: &cp.states,
+        };
+        let report = StepReport {
+            row,
+            step_size: 0.0,
+            times: Default::default(),
+            residual_history: Vec::new(),
+            force_only: false,
+            impl_ex_residual: None,
+        };
+        observer.write_fields("end", &report, &view)?;
+    }
+    Ok(())
+}
+
+/// `solve.json`'s `energy_check`: the balance check of the tracked rows,
+/// or why there is none.
+fn energy_check_json(
+    ctx: &Ctx,
+    energy: &std::result::Result<EnergyTracker<'_>, String>,
+    energy_rows: Option<&[EnergyRow]>,
+    result: &RunResult,
+) -> Result<serde_json::Value> {
+    Ok(match (energy, energy_rows) {
+        (Ok(_), Some(rows)) if rows.len() == result.rows.len() => {
+            let check = solve::energy::check(rows, ENERGY_TOLERANCE);
+            if !check.passed {
+                ctx.printer.line(&format!(
+                "solve: energy check failed: imbalance {:.3e} (step {}), smallest dissipation increment {:.3e} (tolerance {:.0e} of W_ext)",
+                check.max_relative_imbalance, check.step_of_max_imbalance, check.min_dissipation_increment, check.tolerance
+            ));
+            }
+            let mut v = serde_json::to_value(&check)?;
+            v["available"] = true.into();
+            v["final"] = serde_json::to_value(rows.last())?;
+            v
+        }
+        (Err(why), _) => serde_json::json!({"available": false, "reason": why}),
+        _ => {
+            serde_json::json!({"available": false, "reason": "energy rows do not match the curve"})
+        }
+    })
+}
+
+/// Says how a run that returned a result ended, when it was not by
+/// reaching the end of the loading.
+fn report_ending(ctx: &Ctx, ending: &solve::nonlinear::Ending) {
+    match *ending {
+        solve::nonlinear::Ending::Completed => {}
+        solve::nonlinear::Ending::LimitLoad { force, yield_force } => {
+            ctx.printer.line(&format!(
+                "solve: ended at a limit load: the bar yields over its section at F = {:.1} N \
+             ({:.0} % of σ_y A = {:.1} N); the bond sees no more load",
+                force,
+                100.0 * force / yield_force,
+                yield_force
+            ));
+        }
+        solve::nonlinear::Ending::Unloaded {
+            force,
+            peak_force,
+            broken_concrete_tets,
+        } => {
+            ctx.printer.line(&format!(
+                "solve: ended unloaded: F = {force:.3e} N after a peak of {peak_force:.1} N \
+             (the cube split through or the bar pulled free; {broken_concrete_tets} \
+             concrete tets with D > 0.99)"
+            ));
+        }
+    }
 }
 
 /// The energy tracker of a resumed run: the saved record of the steps up to
