@@ -14,13 +14,12 @@
 //! every converged step, every cut-back, and the summary with the phase
 //! times.
 
+use geom::spec::NonAdhesive;
 use mesh::Model;
-use solve::assembly::{ElementLaws, SharedBulkLaw, SharedInterfaceLaw};
 use solve::nonlinear::{Checkpoint, CommittedView, Cutback, Observer, SolveError, StepReport};
 use solve::problems::pullout::solve_pullout;
 use solve::spec::materials::RawMaterials;
 use solve::spec::solver::{RawLoading, RawSolver};
-use std::sync::Arc;
 
 /// Prints each step; the GMRES iterations and factorisations of a step come
 /// from the running summary (read through a checkpoint, a few ms per step).
@@ -108,21 +107,11 @@ fn main() {
     let solver: RawSolver = serde_yaml::from_value(get("solver")).unwrap_or_default();
     let settings = solver.resolve().expect("solver");
     let model = Model::load(std::path::Path::new(&args[1])).expect("model");
-    let steel: SharedBulkLaw = Arc::new(mats.steel.law());
-    let adhesive: SharedInterfaceLaw = Arc::new(mats.interface.law);
-    let laws = ElementLaws::sized(
-        &model,
-        |l| {
-            mats.concrete
-                .at_size(l)
-                .map(|law| Arc::new(law) as SharedBulkLaw)
-        },
-        steel,
-        adhesive,
-        None,
-    )
-    .map_err(|(i, e)| format!("tet {i}: {e}"))
-    .expect("laws");
+    let non_adhesive: NonAdhesive = get("specimen")
+        .get("non_adhesive")
+        .map(|v| serde_yaml::from_value(v.clone()).expect("specimen.non_adhesive"))
+        .unwrap_or_default();
+    let laws = mats.element_laws(&model, non_adhesive).expect("laws");
     println!(
         "{} nodes, {} tets, {} interface elements; {settings:?}",
         model.nodes.len(),

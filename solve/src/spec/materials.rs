@@ -14,6 +14,7 @@
 //! # let _ = element_law;
 //! ```
 
+use crate::assembly::{ElementLaws, SharedBulkLaw, SharedInterfaceLaw};
 use crate::laws::coulomb::Coulomb;
 use crate::laws::elastic::{ElasticInterface, LinearElastic};
 use crate::laws::fczm::{Fczm, DEFAULT_GAMMA};
@@ -24,8 +25,11 @@ use crate::laws::mazars::{
 };
 use crate::laws::tvergaard::Tvergaard;
 use crate::laws::{AnyBulkLaw, AnyInterfaceLaw};
+use geom::spec::NonAdhesive;
 use geom::units::{Dim, RawQuantity, UnitError};
+use mesh::Model;
 use serde::{Deserialize, Serialize};
+use std::sync::Arc;
 
 /// Calibration ratio ξ of eqs. (27)–(28).
 pub const DEFAULT_XI: f64 = 0.72;
@@ -60,7 +64,7 @@ pub enum MaterialsSpecError {
     UnknownLaw {
         key: String,
         law: String,
-        accepted: &'static str,
+        accepted: String,
     },
     #[error("{key}: not a parameter of law {law}")]
     NotForLaw { key: String, law: String },
@@ -199,6 +203,50 @@ pub struct Materials {
     pub interface: InterfaceModel,
 }
 
+/// A concrete tet whose size the concrete law cannot be regularised for.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("materials.concrete: concrete tet {tet} (size l = {size_mm:.3} mm): {source}")]
+pub struct ElementLawError {
+    pub tet: usize,
+    pub size_mm: f64,
+    #[source]
+    pub source: MazarsSizeError,
+}
+
+impl Materials {
+    /// The law of every element of `model`: concrete per tet size (eq. 11),
+    /// steel, the adhesive interface law, and in the non-adhesive zone
+    /// nothing (`free`) or the contact law (`contact`).
+    pub fn element_laws(
+        &self,
+        model: &Model,
+        non_adhesive: NonAdhesive,
+    ) -> Result<ElementLaws, ElementLawError> {
+        let steel: SharedBulkLaw = Arc::new(self.steel.law());
+        let adhesive: SharedInterfaceLaw = Arc::new(self.interface.law);
+        let free: Option<SharedInterfaceLaw> = match non_adhesive {
+            NonAdhesive::Free => None,
+            NonAdhesive::Contact => Some(Arc::new(self.interface.contact_law())),
+        };
+        ElementLaws::sized(
+            model,
+            |l| {
+                self.concrete
+                    .at_size(l)
+                    .map(|law| Arc::new(law) as SharedBulkLaw)
+            },
+            steel,
+            adhesive,
+            free,
+        )
+        .map_err(|(tet, source)| ElementLawError {
+            tet,
+            size_mm: model.tet_size.get(tet).copied().unwrap_or(f64::NAN) * 1e3,
+            source,
+        })
+    }
+}
+
 /// Reads optional quantities under a dotted prefix.
 pub(crate) struct Keys<'a> {
     pub prefix: &'a str,
@@ -266,22 +314,59 @@ impl Keys<'_> {
     }
 }
 
-fn law_name(
-    raw: &Option<String>,
-    default: &str,
-    prefix: &str,
-    accepted: &'static str,
-) -> Result<String, MaterialsSpecError> {
-    let law = raw.clone().unwrap_or_else(|| default.to_string());
-    if accepted.split(", ").any(|a| a == law) {
-        Ok(law)
-    } else {
-        Err(MaterialsSpecError::UnknownLaw {
+/// The laws a material section accepts (`law:`), by their spec names;
+/// the first is the default.
+trait LawChoice: Copy + Sized + 'static {
+    const ACCEPTED: &'static [Self];
+    fn name(self) -> &'static str;
+}
+
+macro_rules! law_choice {
+    ($(#[$doc:meta])* $ty:ident { $($variant:ident => $name:literal),+ $(,)? }) => {
+        $(#[$doc])*
+        #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+        enum $ty { $($variant),+ }
+        impl LawChoice for $ty {
+            const ACCEPTED: &'static [Self] = &[$($ty::$variant),+];
+            fn name(self) -> &'static str {
+                match self { $($ty::$variant => $name),+ }
+            }
+        }
+    };
+}
+
+law_choice!(
+    /// `materials.concrete.law`.
+    ConcreteLaw { Mazars => "mazars", Elastic => "elastic" }
+);
+law_choice!(
+    /// `materials.steel.law`.
+    SteelLaw { J2 => "j2", Elastic => "elastic" }
+);
+law_choice!(
+    /// `materials.interface.law`.
+    InterfaceLawChoice { Fczm => "fczm", Tvergaard => "tvergaard", Coulomb => "coulomb", Elastic => "elastic" }
+);
+
+/// The law `raw` names (the default when absent), or an error listing the
+/// accepted ones.
+fn law_kind<L: LawChoice>(raw: &Option<String>, prefix: &str) -> Result<L, MaterialsSpecError> {
+    let Some(name) = raw else {
+        return Ok(L::ACCEPTED[0]);
+    };
+    L::ACCEPTED
+        .iter()
+        .copied()
+        .find(|k| k.name() == name)
+        .ok_or_else(|| MaterialsSpecError::UnknownLaw {
             key: format!("{prefix}.law"),
-            law,
-            accepted,
+            law: name.clone(),
+            accepted: L::ACCEPTED
+                .iter()
+                .map(|k| k.name())
+                .collect::<Vec<_>>()
+                .join(", "),
         })
-    }
 }
 
 /// Resolves `raw` as concrete under `prefix` (e.g. `materials.concrete`).
@@ -289,14 +374,17 @@ pub fn resolve_concrete(
     raw: &RawConcrete,
     prefix: &str,
 ) -> Result<ConcreteModel, MaterialsSpecError> {
-    let law = law_name(&raw.law, "mazars", prefix, "mazars, elastic")?;
-    let k = Keys { prefix, law: &law };
+    let law = law_kind::<ConcreteLaw>(&raw.law, prefix)?;
+    let k = Keys {
+        prefix,
+        law: law.name(),
+    };
     let e = k.positive(
         "E",
         k.get(&raw.young_modulus, "E", Dim::Stress)?.unwrap_or(30e9),
     )?;
     let nu = k.poisson(k.get(&raw.nu, "nu", Dim::Dimensionless)?.unwrap_or(0.2))?;
-    if law == "elastic" {
+    if law == ConcreteLaw::Elastic {
         k.not_for(&[
             ("ft", raw.ft.is_some()),
             ("eps_d0", raw.eps_d0.is_some()),
@@ -370,15 +458,18 @@ pub fn resolve_concrete(
 
 /// Resolves `raw` as steel under `prefix`.
 pub fn resolve_steel(raw: &RawSteel, prefix: &str) -> Result<SteelModel, MaterialsSpecError> {
-    let law = law_name(&raw.law, "j2", prefix, "j2, elastic")?;
-    let k = Keys { prefix, law: &law };
+    let law = law_kind::<SteelLaw>(&raw.law, prefix)?;
+    let k = Keys {
+        prefix,
+        law: law.name(),
+    };
     let e = k.positive(
         "E",
         k.get(&raw.young_modulus, "E", Dim::Stress)?
             .unwrap_or(200e9),
     )?;
     let nu = k.poisson(k.get(&raw.nu, "nu", Dim::Dimensionless)?.unwrap_or(0.3))?;
-    if law == "elastic" {
+    if law == SteelLaw::Elastic {
         k.not_for(&[("sigma_y", raw.sigma_y.is_some())])?;
         return Ok(SteelModel::Elastic(LinearElastic {
             young_modulus: e,
@@ -405,194 +496,200 @@ pub fn resolve_interface(
     concrete: Option<&ConcreteModel>,
     prefix: &str,
 ) -> Result<InterfaceModel, MaterialsSpecError> {
-    let law = law_name(
-        &raw.law,
-        "fczm",
+    let kind = law_kind::<InterfaceLawChoice>(&raw.law, prefix)?;
+    let k = Keys {
         prefix,
-        "fczm, tvergaard, coulomb, elastic",
+        law: kind.name(),
+    };
+    let law = match kind {
+        InterfaceLawChoice::Fczm | InterfaceLawChoice::Tvergaard => {
+            cohesive_interface(raw, concrete, &k, kind)?
+        }
+        InterfaceLawChoice::Coulomb => coulomb_interface(raw, &k)?,
+        InterfaceLawChoice::Elastic => elastic_interface(raw, &k)?,
+    };
+    Ok(InterfaceModel { law })
+}
+
+/// The FCZM or Tvergaard interface (`law`), calibrated from `concrete`
+/// where f_t or G_f are not given.
+fn cohesive_interface(
+    raw: &RawInterface,
+    concrete: Option<&ConcreteModel>,
+    k: &Keys,
+    law: InterfaceLawChoice,
+) -> Result<AnyInterfaceLaw, MaterialsSpecError> {
+    k.not_for(&[
+        ("Kn", raw.kn.is_some()),
+        ("Ks", raw.ks.is_some()),
+        ("C", raw.cohesion.is_some()),
+        ("phi", raw.phi.is_some()),
+    ])?;
+    let xi = k
+        .get(&raw.xi, "xi", Dim::Dimensionless)?
+        .unwrap_or(DEFAULT_XI);
+    let xi = k.check("xi", xi, xi > 0.0 && xi <= 1.0, "in (0, 1]")?;
+    let con = match concrete {
+        Some(ConcreteModel::Mazars(m)) => Some(m),
+        _ => None,
+    };
+    let calibrated = |name: &str, what: &str, from: Option<f64>| {
+        from.map(|v| xi * v)
+            .ok_or_else(|| MaterialsSpecError::Missing {
+                key: k.key(name),
+                law: format!("{} (no Mazars concrete {what} to calibrate from)", k.law),
+            })
+    };
+    let ft = match k.get(&raw.ft, "ft", Dim::Stress)? {
+        Some(v) => v,
+        None => calibrated("ft", "ft", con.map(|m| m.tensile_strength()))?,
+    };
+    let ft = k.positive("ft", ft)?;
+    let gf = match k.get(&raw.gf, "Gf", Dim::EnergyPerArea)? {
+        Some(v) => v,
+        None => calibrated(
+            "Gf",
+            "Gf",
+            con.and_then(|m| match m.tension {
+                TensionSoftening::Regularised { fracture_energy } => Some(fracture_energy),
+                TensionSoftening::Classic { .. } => None,
+            }),
+        )?,
+    };
+    let gf = k.positive("Gf", gf)?;
+    let lambda0 = k.positive(
+        "lambda0",
+        k.get(&raw.lambda0, "lambda0", Dim::Length)?
+            .unwrap_or(DEFAULT_LAMBDA0),
     )?;
-    let k = Keys { prefix, law: &law };
-    let cohesive = law == "fczm" || law == "tvergaard";
-    let law = match law.as_str() {
-        "fczm" | "tvergaard" => {
-            k.not_for(&[
-                ("Kn", raw.kn.is_some()),
-                ("Ks", raw.ks.is_some()),
-                ("C", raw.cohesion.is_some()),
-                ("phi", raw.phi.is_some()),
-            ])?;
-            let xi = k
-                .get(&raw.xi, "xi", Dim::Dimensionless)?
-                .unwrap_or(DEFAULT_XI);
-            let xi = k.check("xi", xi, xi > 0.0 && xi <= 1.0, "in (0, 1]")?;
-            let con = match concrete {
-                Some(ConcreteModel::Mazars(m)) => Some(m),
-                _ => None,
-            };
-            let calibrated = |name: &str, what: &str, from: Option<f64>| {
-                from.map(|v| xi * v)
-                    .ok_or_else(|| MaterialsSpecError::Missing {
-                        key: k.key(name),
-                        law: format!("{} (no Mazars concrete {what} to calibrate from)", k.law),
-                    })
-            };
-            let ft = match k.get(&raw.ft, "ft", Dim::Stress)? {
-                Some(v) => v,
-                None => calibrated("ft", "ft", con.map(|m| m.tensile_strength()))?,
-            };
-            let ft = k.positive("ft", ft)?;
-            let gf = match k.get(&raw.gf, "Gf", Dim::EnergyPerArea)? {
-                Some(v) => v,
-                None => calibrated(
-                    "Gf",
-                    "Gf",
-                    con.and_then(|m| match m.tension {
-                        TensionSoftening::Regularised { fracture_energy } => Some(fracture_energy),
-                        TensionSoftening::Classic { .. } => None,
-                    }),
-                )?,
-            };
-            let gf = k.positive("Gf", gf)?;
-            let lambda0 = k.positive(
-                "lambda0",
-                k.get(&raw.lambda0, "lambda0", Dim::Length)?
-                    .unwrap_or(DEFAULT_LAMBDA0),
-            )?;
-            let delta_s = match k.get(&raw.delta_s, "delta_s", Dim::Dimensionless)? {
-                Some(v) => k.positive("delta_s", v)?,
-                None => {
-                    let v = delta_s_eq29(ft);
-                    if v <= 0.0 {
-                        return Err(MaterialsSpecError::Inconsistent {
-                            key: k.key("delta_s"),
-                            detail: format!(
-                                "eq. (29) gives {v} <= 0 for ft = {ft} Pa; give delta_s"
-                            ),
-                        });
-                    }
-                    v
-                }
-            };
-            if law == "tvergaard" {
-                k.not_for(&[
-                    ("mu", raw.mu.is_some()),
-                    ("zeta", raw.zeta.is_some()),
-                    ("gamma", raw.gamma.is_some()),
-                    ("contact_smoothing", raw.contact_smoothing.is_some()),
-                ])?;
-                AnyInterfaceLaw::Tvergaard(Tvergaard {
-                    tensile_strength: ft,
-                    fracture_energy: gf,
-                    lambda0,
-                    delta_s,
-                })
-            } else {
-                let mu = k
-                    .get(&raw.mu, "mu", Dim::Dimensionless)?
-                    .unwrap_or(DEFAULT_MU);
-                let mu = k.check("mu", mu, mu >= 0.0, ">= 0")?;
-                let zeta = k.positive(
-                    "zeta",
-                    k.get(&raw.zeta, "zeta", Dim::Dimensionless)?
-                        .unwrap_or(DEFAULT_ZETA),
-                )?;
-                let gamma = k
-                    .get(&raw.gamma, "gamma", Dim::Stress)?
-                    .unwrap_or(DEFAULT_GAMMA);
-                let gamma = k.check("gamma", gamma, gamma < 0.0, "< 0 (a compressive stress)")?;
-                let contact_smoothing = k
-                    .get(&raw.contact_smoothing, "contact_smoothing", Dim::Length)?
-                    .unwrap_or(DEFAULT_CONTACT_SMOOTHING);
-                let contact_smoothing = k.check(
-                    "contact_smoothing",
-                    contact_smoothing,
-                    (0.0..lambda0).contains(&contact_smoothing),
-                    "in [0, lambda0)",
-                )?;
-                AnyInterfaceLaw::Fczm(Fczm {
-                    tensile_strength: ft,
-                    fracture_energy: gf,
-                    lambda0,
-                    delta_s,
-                    friction: mu,
-                    zeta,
-                    gamma,
-                    min_damage: 0.0,
-                    contact_smoothing,
-                })
+    let delta_s = match k.get(&raw.delta_s, "delta_s", Dim::Dimensionless)? {
+        Some(v) => k.positive("delta_s", v)?,
+        None => {
+            let v = delta_s_eq29(ft);
+            if v <= 0.0 {
+                return Err(MaterialsSpecError::Inconsistent {
+                    key: k.key("delta_s"),
+                    detail: format!("eq. (29) gives {v} <= 0 for ft = {ft} Pa; give delta_s"),
+                });
             }
-        }
-        "coulomb" => {
-            k.not_for(&[
-                ("Gf", raw.gf.is_some()),
-                ("lambda0", raw.lambda0.is_some()),
-                ("delta_s", raw.delta_s.is_some()),
-                ("mu", raw.mu.is_some()),
-                ("zeta", raw.zeta.is_some()),
-                ("gamma", raw.gamma.is_some()),
-                ("contact_smoothing", raw.contact_smoothing.is_some()),
-                ("xi", raw.xi.is_some()),
-            ])?;
-            let kn = k.positive("Kn", k.req(&raw.kn, "Kn", Dim::StiffnessPerArea)?)?;
-            let ks = k.positive("Ks", k.req(&raw.ks, "Ks", Dim::StiffnessPerArea)?)?;
-            let c = k.req(&raw.cohesion, "C", Dim::Stress)?;
-            let c = k.check("C", c, c >= 0.0, ">= 0")?;
-            let phi = k.req(&raw.phi, "phi", Dim::Angle)?;
-            let phi = k.check(
-                "phi",
-                phi,
-                (0.0..std::f64::consts::FRAC_PI_2).contains(&phi),
-                "in [0, 90 deg)",
-            )?;
-            let ft = k.req(&raw.ft, "ft", Dim::Stress)?;
-            let limit = if phi > 0.0 {
-                c / phi.tan()
-            } else {
-                f64::INFINITY
-            };
-            let ft = k.check(
-                "ft",
-                ft,
-                ft >= 0.0 && ft <= limit,
-                &format!("in [0, C/tan(phi)] = [0, {limit}] Pa (eq. B.2)"),
-            )?;
-            AnyInterfaceLaw::Coulomb(Coulomb {
-                normal_stiffness: kn,
-                shear_stiffness: ks,
-                tensile_strength: ft,
-                cohesion: c,
-                friction_angle: phi,
-            })
-        }
-        _ => {
-            k.not_for(&[
-                ("ft", raw.ft.is_some()),
-                ("Gf", raw.gf.is_some()),
-                ("lambda0", raw.lambda0.is_some()),
-                ("delta_s", raw.delta_s.is_some()),
-                ("mu", raw.mu.is_some()),
-                ("zeta", raw.zeta.is_some()),
-                ("gamma", raw.gamma.is_some()),
-                ("contact_smoothing", raw.contact_smoothing.is_some()),
-                ("xi", raw.xi.is_some()),
-                ("C", raw.cohesion.is_some()),
-                ("phi", raw.phi.is_some()),
-            ])?;
-            let kn = k.positive("Kn", k.req(&raw.kn, "Kn", Dim::StiffnessPerArea)?)?;
-            let ks = k.positive("Ks", k.req(&raw.ks, "Ks", Dim::StiffnessPerArea)?)?;
-            AnyInterfaceLaw::Elastic(ElasticInterface {
-                normal_stiffness: kn,
-                shear_stiffness: ks,
-            })
+            v
         }
     };
-    if !cohesive && raw.xi.is_some() {
-        return Err(MaterialsSpecError::NotForLaw {
-            key: k.key("xi"),
-            law: k.law.to_string(),
-        });
-    }
-    Ok(InterfaceModel { law })
+    Ok(if law == InterfaceLawChoice::Tvergaard {
+        k.not_for(&[
+            ("mu", raw.mu.is_some()),
+            ("zeta", raw.zeta.is_some()),
+            ("gamma", raw.gamma.is_some()),
+            ("contact_smoothing", raw.contact_smoothing.is_some()),
+        ])?;
+        AnyInterfaceLaw::Tvergaard(Tvergaard {
+            tensile_strength: ft,
+            fracture_energy: gf,
+            lambda0,
+            delta_s,
+        })
+    } else {
+        let mu = k
+            .get(&raw.mu, "mu", Dim::Dimensionless)?
+            .unwrap_or(DEFAULT_MU);
+        let mu = k.check("mu", mu, mu >= 0.0, ">= 0")?;
+        let zeta = k.positive(
+            "zeta",
+            k.get(&raw.zeta, "zeta", Dim::Dimensionless)?
+                .unwrap_or(DEFAULT_ZETA),
+        )?;
+        let gamma = k
+            .get(&raw.gamma, "gamma", Dim::Stress)?
+            .unwrap_or(DEFAULT_GAMMA);
+        let gamma = k.check("gamma", gamma, gamma < 0.0, "< 0 (a compressive stress)")?;
+        let contact_smoothing = k
+            .get(&raw.contact_smoothing, "contact_smoothing", Dim::Length)?
+            .unwrap_or(DEFAULT_CONTACT_SMOOTHING);
+        let contact_smoothing = k.check(
+            "contact_smoothing",
+            contact_smoothing,
+            (0.0..lambda0).contains(&contact_smoothing),
+            "in [0, lambda0)",
+        )?;
+        AnyInterfaceLaw::Fczm(Fczm {
+            tensile_strength: ft,
+            fracture_energy: gf,
+            lambda0,
+            delta_s,
+            friction: mu,
+            zeta,
+            gamma,
+            min_damage: 0.0,
+            contact_smoothing,
+        })
+    })
+}
+
+/// The Coulomb interface (elastic springs, tension cut-off, friction).
+fn coulomb_interface(raw: &RawInterface, k: &Keys) -> Result<AnyInterfaceLaw, MaterialsSpecError> {
+    k.not_for(&[
+        ("Gf", raw.gf.is_some()),
+        ("lambda0", raw.lambda0.is_some()),
+        ("delta_s", raw.delta_s.is_some()),
+        ("mu", raw.mu.is_some()),
+        ("zeta", raw.zeta.is_some()),
+        ("gamma", raw.gamma.is_some()),
+        ("contact_smoothing", raw.contact_smoothing.is_some()),
+        ("xi", raw.xi.is_some()),
+    ])?;
+    let kn = k.positive("Kn", k.req(&raw.kn, "Kn", Dim::StiffnessPerArea)?)?;
+    let ks = k.positive("Ks", k.req(&raw.ks, "Ks", Dim::StiffnessPerArea)?)?;
+    let c = k.req(&raw.cohesion, "C", Dim::Stress)?;
+    let c = k.check("C", c, c >= 0.0, ">= 0")?;
+    let phi = k.req(&raw.phi, "phi", Dim::Angle)?;
+    let phi = k.check(
+        "phi",
+        phi,
+        (0.0..std::f64::consts::FRAC_PI_2).contains(&phi),
+        "in [0, 90 deg)",
+    )?;
+    let ft = k.req(&raw.ft, "ft", Dim::Stress)?;
+    let limit = if phi > 0.0 {
+        c / phi.tan()
+    } else {
+        f64::INFINITY
+    };
+    let ft = k.check(
+        "ft",
+        ft,
+        ft >= 0.0 && ft <= limit,
+        &format!("in [0, C/tan(phi)] = [0, {limit}] Pa (eq. B.2)"),
+    )?;
+    Ok(AnyInterfaceLaw::Coulomb(Coulomb {
+        normal_stiffness: kn,
+        shear_stiffness: ks,
+        tensile_strength: ft,
+        cohesion: c,
+        friction_angle: phi,
+    }))
+}
+
+/// The linear elastic interface.
+fn elastic_interface(raw: &RawInterface, k: &Keys) -> Result<AnyInterfaceLaw, MaterialsSpecError> {
+    k.not_for(&[
+        ("ft", raw.ft.is_some()),
+        ("Gf", raw.gf.is_some()),
+        ("lambda0", raw.lambda0.is_some()),
+        ("delta_s", raw.delta_s.is_some()),
+        ("mu", raw.mu.is_some()),
+        ("zeta", raw.zeta.is_some()),
+        ("gamma", raw.gamma.is_some()),
+        ("contact_smoothing", raw.contact_smoothing.is_some()),
+        ("xi", raw.xi.is_some()),
+        ("C", raw.cohesion.is_some()),
+        ("phi", raw.phi.is_some()),
+    ])?;
+    let kn = k.positive("Kn", k.req(&raw.kn, "Kn", Dim::StiffnessPerArea)?)?;
+    let ks = k.positive("Ks", k.req(&raw.ks, "Ks", Dim::StiffnessPerArea)?)?;
+    Ok(AnyInterfaceLaw::Elastic(ElasticInterface {
+        normal_stiffness: kn,
+        shear_stiffness: ks,
+    }))
 }
 
 impl RawMaterials {
