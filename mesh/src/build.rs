@@ -192,132 +192,238 @@ pub fn build_model(
     bar_diameter: f64,
     adhesive_length: f64,
 ) -> Result<(Model, MeshReport), MeshError> {
-    let path = raw.source.clone();
-    let topo = |detail: String| MeshError::Topology {
-        path: path.clone(),
-        detail,
+    check_groups(raw)?;
+    let numbering = Numbering::new(raw);
+    let (steel, reoriented_steel) = oriented(raw, &raw.volumes["steel"], "steel")?;
+    let (concrete, reoriented_concrete) = oriented(raw, &raw.volumes["concrete"], "concrete")?;
+    let interfaces = interface_elements(raw, &numbering, &steel, &concrete)?;
+    let tets = Tets::renumbered(raw, &numbering, &steel, &concrete);
+    let (node_sets, symmetry) = node_sets(raw, &numbering)?;
+
+    let n_tets = tets.tets.len() as f64;
+    let in_zone = |zone| {
+        interfaces
+            .iter()
+            .filter(move |e: &&InterfaceElement| e.zone == zone)
     };
-    let missing = |group: &str, what: &str| MeshError::MissingGroup {
-        path: path.clone(),
+    let report = MeshReport {
+        nodes: numbering.nodes.len(),
+        tets_steel: steel.len(),
+        tets_concrete: concrete.len(),
+        interface_elements_adhesive: in_zone(InterfaceZone::Adhesive).count(),
+        interface_elements_free: in_zone(InterfaceZone::Free).count(),
+        duplicated_nodes: numbering.duplicated,
+        reoriented_tets: reoriented_steel + reoriented_concrete,
+        min_quality: tets.quality.iter().copied().fold(f64::INFINITY, f64::min),
+        mean_quality: tets.quality.iter().sum::<f64>() / n_tets,
+        tets_quality_below_0_1: tets.quality.iter().filter(|&&q| q < 0.1).count(),
+        min_size_m: tets.size.iter().copied().fold(f64::INFINITY, f64::min),
+        max_size_m: tets.size.iter().copied().fold(0.0, f64::max),
+        interface_area_adhesive_m2: in_zone(InterfaceZone::Adhesive).map(|e| e.area).sum(),
+        interface_area_free_m2: in_zone(InterfaceZone::Free).map(|e| e.area).sum(),
+        volume_steel_m3: tets.volume_steel,
+        volume_concrete_m3: tets.volume_concrete,
+        symmetry,
+        symmetry_nodes_x: node_sets.symmetry_x.len(),
+        symmetry_nodes_y: node_sets.symmetry_y.len(),
+        ..Default::default()
+    };
+    let model = Model {
+        nodes: numbering.nodes,
+        node_region: numbering.node_region,
+        tets: tets.tets,
+        tet_region: tets.region,
+        tet_size: tets.size,
+        interfaces,
+        node_sets,
+        bar_diameter,
+        adhesive_length,
+        symmetry,
+    };
+    Ok((model, report))
+}
+
+fn topology_error(raw: &RawMesh, detail: String) -> MeshError {
+    MeshError::Topology {
+        path: raw.source.clone(),
+        detail,
+    }
+}
+
+fn missing_group(raw: &RawMesh, group: &str, what: &str) -> MeshError {
+    MeshError::MissingGroup {
+        path: raw.source.clone(),
         group: group.to_string(),
         what: what.to_string(),
-    };
+    }
+}
+
+/// Refuses a mesh without the physical groups the model needs.
+fn check_groups(raw: &RawMesh) -> Result<(), MeshError> {
     for g in VOLUME_GROUPS {
         if raw.volumes.get(g).is_none_or(|v| v.is_empty()) {
-            return Err(missing(g, "a physical volume of linear tets"));
+            return Err(missing_group(raw, g, "a physical volume of linear tets"));
         }
     }
     for g in REQUIRED_SURFACES {
         if raw.surfaces.get(g).is_none_or(|v| v.is_empty()) {
-            return Err(missing(g, "a physical surface of triangles"));
+            return Err(missing_group(raw, g, "a physical surface of triangles"));
         }
     }
-    let empty = Vec::new();
-    let steel_in = &raw.volumes["steel"];
-    let concrete_in = &raw.volumes["concrete"];
-    let n_raw = raw.nodes.len();
+    Ok(())
+}
 
-    // Which side(s) each node touches.
-    let mut in_steel = vec![false; n_raw];
-    let mut in_concrete = vec![false; n_raw];
-    for t in steel_in {
-        for &i in t {
-            in_steel[i as usize] = true;
+/// The model's node numbering: nodes of tets in file order, then the
+/// concrete twins of the interface nodes (see the module doc).
+struct Numbering {
+    in_steel: Vec<bool>,
+    in_concrete: Vec<bool>,
+    /// Raw index → model id (steel side for interface nodes).
+    new_id: Vec<u32>,
+    /// Raw index → concrete twin's model id (`u32::MAX`: no twin).
+    twin: Vec<u32>,
+    nodes: Vec<V3>,
+    node_region: Vec<Region>,
+    duplicated: usize,
+}
+
+impl Numbering {
+    fn new(raw: &RawMesh) -> Self {
+        let n_raw = raw.nodes.len();
+        let touched = |tets: &[[u32; 4]]| {
+            let mut v = vec![false; n_raw];
+            for t in tets {
+                for &i in t {
+                    v[i as usize] = true;
+                }
+            }
+            v
+        };
+        let in_steel = touched(&raw.volumes["steel"]);
+        let in_concrete = touched(&raw.volumes["concrete"]);
+        let mut new_id = vec![u32::MAX; n_raw];
+        let mut nodes: Vec<V3> = Vec::with_capacity(n_raw);
+        let mut node_region = Vec::with_capacity(n_raw);
+        for i in 0..n_raw {
+            if in_steel[i] || in_concrete[i] {
+                new_id[i] = nodes.len() as u32;
+                nodes.push(raw.nodes[i]);
+                node_region.push(if in_steel[i] {
+                    Region::Steel
+                } else {
+                    Region::Concrete
+                });
+            }
         }
-    }
-    for t in concrete_in {
-        for &i in t {
-            in_concrete[i as usize] = true;
+        let mut twin = vec![u32::MAX; n_raw];
+        let mut duplicated = 0;
+        for i in 0..n_raw {
+            if in_steel[i] && in_concrete[i] {
+                twin[i] = nodes.len() as u32;
+                nodes.push(raw.nodes[i]);
+                node_region.push(Region::Concrete);
+                duplicated += 1;
+            }
+        }
+        Numbering {
+            in_steel,
+            in_concrete,
+            new_id,
+            twin,
+            nodes,
+            node_region,
+            duplicated,
         }
     }
 
-    // Compact numbering: nodes of tets in file order, then the twins.
-    let mut new_id = vec![u32::MAX; n_raw];
-    let mut nodes: Vec<V3> = Vec::with_capacity(n_raw);
-    let mut node_region = Vec::with_capacity(n_raw);
-    for i in 0..n_raw {
-        if in_steel[i] || in_concrete[i] {
-            new_id[i] = nodes.len() as u32;
-            nodes.push(raw.nodes[i]);
-            node_region.push(if in_steel[i] {
-                Region::Steel
-            } else {
-                Region::Concrete
-            });
-        }
+    fn is_interface(&self, i: u32) -> bool {
+        self.twin[i as usize] != u32::MAX
     }
-    let mut twin = vec![u32::MAX; n_raw];
-    let mut duplicated = 0;
-    for i in 0..n_raw {
-        if in_steel[i] && in_concrete[i] {
-            twin[i] = nodes.len() as u32;
-            nodes.push(raw.nodes[i]);
-            node_region.push(Region::Concrete);
-            duplicated += 1;
-        }
-    }
-    let concrete_id = |i: u32| -> u32 {
-        let t = twin[i as usize];
+
+    /// The id a concrete element uses for raw node `i`.
+    fn concrete_id(&self, i: u32) -> u32 {
+        let t = self.twin[i as usize];
         if t != u32::MAX {
             t
         } else {
-            new_id[i as usize]
-        }
-    };
-
-    // Oriented tets (raw ids), size and quality.
-    let mut reoriented = 0;
-    let mut orient = |tets: &[[u32; 4]], name: &str| -> Result<Vec<[u32; 4]>, MeshError> {
-        let mut out = Vec::with_capacity(tets.len());
-        for (k, t) in tets.iter().enumerate() {
-            let p = t.map(|i| raw.nodes[i as usize]);
-            let v = tet_volume(p);
-            if v == 0.0 || !v.is_finite() {
-                return Err(topo(format!(
-                    "{name} tet {k} (nodes {:?}) has zero volume",
-                    t.map(|i| raw.node_tags[i as usize])
-                )));
-            }
-            if v < 0.0 {
-                reoriented += 1;
-                out.push([t[0], t[1], t[3], t[2]]);
-            } else {
-                out.push(*t);
-            }
-        }
-        Ok(out)
-    };
-    let steel = orient(steel_in, "steel")?;
-    let concrete = orient(concrete_in, "concrete")?;
-
-    // Interface faces: faces of a steel tet, all of whose nodes are interface
-    // nodes, that are also faces of a concrete tet.
-    let mut steel_faces: HashMap<[u32; 3], (u32, u8)> = HashMap::new();
-    for (k, t) in steel.iter().enumerate() {
-        for (f, face) in TET_FACES.iter().enumerate() {
-            let tri = face.map(|j| t[j]);
-            if tri.iter().all(|&i| twin[i as usize] != u32::MAX) {
-                steel_faces.insert(sorted3(tri), (k as u32, f as u8));
-            }
+            self.new_id[i as usize]
         }
     }
+}
+
+/// `tets` (raw ids) with positive volume (two nodes swapped where needed),
+/// and how many were swapped; a flat tet is an error naming `name`.
+fn oriented(
+    raw: &RawMesh,
+    tets: &[[u32; 4]],
+    name: &str,
+) -> Result<(Vec<[u32; 4]>, usize), MeshError> {
+    let mut reoriented = 0;
+    let mut out = Vec::with_capacity(tets.len());
+    for (k, t) in tets.iter().enumerate() {
+        let p = t.map(|i| raw.nodes[i as usize]);
+        let v = tet_volume(p);
+        if v == 0.0 || !v.is_finite() {
+            return Err(topology_error(
+                raw,
+                format!(
+                    "{name} tet {k} (nodes {:?}) has zero volume",
+                    t.map(|i| raw.node_tags[i as usize])
+                ),
+            ));
+        }
+        if v < 0.0 {
+            reoriented += 1;
+            out.push([t[0], t[1], t[3], t[2]]);
+        } else {
+            out.push(*t);
+        }
+    }
+    Ok((out, reoriented))
+}
+
+/// The interface group (zone) of each interface triangle (sorted raw ids).
+fn interface_zones(raw: &RawMesh) -> Result<HashMap<[u32; 3], InterfaceZone>, MeshError> {
     let mut zone_of: HashMap<[u32; 3], InterfaceZone> = HashMap::new();
     for (g, zone) in [
         ("interface_adhesive", InterfaceZone::Adhesive),
         ("interface_free", InterfaceZone::Free),
     ] {
-        for tri in raw.surfaces.get(g).unwrap_or(&empty) {
+        for tri in raw.surfaces.get(g).map_or(&[][..], |v| v.as_slice()) {
             if zone_of
                 .insert(sorted3(*tri), zone)
                 .is_some_and(|z| z != zone)
             {
-                return Err(topo(format!("an interface triangle is in both interface_adhesive and interface_free (nodes {:?})", tri.map(|i| raw.node_tags[i as usize]))));
+                return Err(topology_error(raw, format!("an interface triangle is in both interface_adhesive and interface_free (nodes {:?})", tri.map(|i| raw.node_tags[i as usize]))));
             }
         }
     }
+    Ok(zone_of)
+}
+
+/// One interface element per triangle shared by a steel and a concrete
+/// tet: steel nodes first, ordered so that n points from steel into
+/// concrete, then their twins.
+fn interface_elements(
+    raw: &RawMesh,
+    numbering: &Numbering,
+    steel: &[[u32; 4]],
+    concrete: &[[u32; 4]],
+) -> Result<Vec<InterfaceElement>, MeshError> {
+    // Faces of a steel tet all of whose nodes are interface nodes.
+    let mut steel_faces: HashMap<[u32; 3], (u32, u8)> = HashMap::new();
+    for (k, t) in steel.iter().enumerate() {
+        for (f, face) in TET_FACES.iter().enumerate() {
+            let tri = face.map(|j| t[j]);
+            if tri.iter().all(|&i| numbering.is_interface(i)) {
+                steel_faces.insert(sorted3(tri), (k as u32, f as u8));
+            }
+        }
+    }
+    let zone_of = interface_zones(raw)?;
     let mut interfaces = Vec::new();
     let mut matched = 0usize;
-    for t in &concrete {
+    for t in concrete {
         for face in TET_FACES.iter() {
             let tri = face.map(|j| t[j]);
             let key = sorted3(tri);
@@ -326,7 +432,7 @@ pub fn build_model(
             };
             let zone = *zone_of.get(&key).ok_or_else(|| {
                 let c = centroid(&raw.nodes, &tri);
-                topo(format!(
+                topology_error(raw, format!(
                     "the triangle shared by a steel and a concrete tet at ({:.6}, {:.6}, {:.6}) m is in neither interface_adhesive nor interface_free",
                     c[0], c[1], c[2]
                 ))
@@ -346,11 +452,12 @@ pub fn build_model(
             let a2 = norm(nrm);
             let n = scale(nrm, 1.0 / a2);
             let frame = make_frame(n, centroid(&raw.nodes, &s));
+            let (id, twin) = (&numbering.new_id, &numbering.twin);
             interfaces.push(InterfaceElement {
                 nodes: [
-                    new_id[s[0] as usize],
-                    new_id[s[1] as usize],
-                    new_id[s[2] as usize],
+                    id[s[0] as usize],
+                    id[s[1] as usize],
+                    id[s[2] as usize],
                     twin[s[0] as usize],
                     twin[s[1] as usize],
                     twin[s[2] as usize],
@@ -362,47 +469,81 @@ pub fn build_model(
         }
     }
     if matched != zone_of.len() {
-        return Err(topo(format!(
+        return Err(topology_error(raw, format!(
             "{} triangles of interface_adhesive/interface_free are not shared by a steel and a concrete tet ({} are)",
             zone_of.len() - matched.min(zone_of.len()),
             matched
         )));
     }
+    Ok(interfaces)
+}
 
-    // Renumbered tets, with size and quality.
-    let mut tets = Vec::with_capacity(steel.len() + concrete.len());
-    let mut tet_region = Vec::with_capacity(tets.capacity());
-    let mut tet_size = Vec::with_capacity(tets.capacity());
-    let mut quality = Vec::with_capacity(tets.capacity());
-    let (mut vol_s, mut vol_c) = (0.0, 0.0);
-    for (list, region) in [(&steel, Region::Steel), (&concrete, Region::Concrete)] {
-        for t in list.iter() {
-            let p = t.map(|i| raw.nodes[i as usize]);
-            let v = tet_volume(p);
-            match region {
-                Region::Steel => vol_s += v,
-                Region::Concrete => vol_c += v,
+/// The model's tets (steel, then concrete) in model ids, with their
+/// region, characteristic size and quality, and the regions' volumes.
+struct Tets {
+    tets: Vec<[u32; 4]>,
+    region: Vec<Region>,
+    size: Vec<f64>,
+    quality: Vec<f64>,
+    volume_steel: f64,
+    volume_concrete: f64,
+}
+
+impl Tets {
+    fn renumbered(
+        raw: &RawMesh,
+        numbering: &Numbering,
+        steel: &[[u32; 4]],
+        concrete: &[[u32; 4]],
+    ) -> Self {
+        let n = steel.len() + concrete.len();
+        let mut out = Tets {
+            tets: Vec::with_capacity(n),
+            region: Vec::with_capacity(n),
+            size: Vec::with_capacity(n),
+            quality: Vec::with_capacity(n),
+            volume_steel: 0.0,
+            volume_concrete: 0.0,
+        };
+        for (list, region) in [(steel, Region::Steel), (concrete, Region::Concrete)] {
+            for t in list.iter() {
+                let p = t.map(|i| raw.nodes[i as usize]);
+                let v = tet_volume(p);
+                match region {
+                    Region::Steel => out.volume_steel += v,
+                    Region::Concrete => out.volume_concrete += v,
+                }
+                out.size.push(characteristic_size(v));
+                out.quality.push(tet_quality(p));
+                out.region.push(region);
+                out.tets.push(match region {
+                    Region::Steel => t.map(|i| numbering.new_id[i as usize]),
+                    Region::Concrete => t.map(|i| numbering.concrete_id(i)),
+                });
             }
-            tet_size.push(characteristic_size(v));
-            quality.push(tet_quality(p));
-            tet_region.push(region);
-            tets.push(match region {
-                Region::Steel => t.map(|i| new_id[i as usize]),
-                Region::Concrete => t.map(concrete_id),
-            });
         }
+        out
     }
+}
 
-    // Node sets: steel faces keep original ids, concrete faces use twins.
-    let set = |group: &str, side: Region| -> Result<Vec<u32>, MeshError> {
-        let mut v = Vec::new();
-        for tri in raw.surfaces.get(group).unwrap_or(&empty) {
-            for &i in tri {
-                let id = match side {
-                    Region::Steel if in_steel[i as usize] => new_id[i as usize],
-                    Region::Concrete if in_concrete[i as usize] => concrete_id(i),
-                    _ => {
-                        return Err(topo(format!(
+/// The model ids of the nodes of physical surface `group` on `side`:
+/// steel faces keep original ids, concrete faces use twins.
+fn side_set(
+    raw: &RawMesh,
+    numbering: &Numbering,
+    group: &str,
+    side: Region,
+) -> Result<Vec<u32>, MeshError> {
+    let mut v = Vec::new();
+    for tri in raw.surfaces.get(group).map_or(&[][..], |v| v.as_slice()) {
+        for &i in tri {
+            let id = match side {
+                Region::Steel if numbering.in_steel[i as usize] => numbering.new_id[i as usize],
+                Region::Concrete if numbering.in_concrete[i as usize] => numbering.concrete_id(i),
+                _ => {
+                    return Err(topology_error(
+                        raw,
+                        format!(
                             "node {} of physical surface \"{group}\" belongs to no {} tet",
                             raw.node_tags[i as usize],
                             if side == Region::Steel {
@@ -410,41 +551,55 @@ pub fn build_model(
                             } else {
                                 "concrete"
                             }
-                        )))
-                    }
-                };
-                v.push(id);
-            }
+                        ),
+                    ))
+                }
+            };
+            v.push(id);
         }
-        v.sort_unstable();
-        v.dedup();
-        Ok(v)
-    };
-    // Mirror-plane faces belong to either side; a node on the plane gets the
-    // id of every side whose tets it touches, so an interface node lying in
-    // the plane is held through its steel original and its concrete twin.
-    let mirror_set = |group: &str| -> Result<Vec<u32>, MeshError> {
-        let mut v = Vec::new();
-        for tri in raw.surfaces.get(group).unwrap_or(&empty) {
-            for &i in tri {
-                if !in_steel[i as usize] && !in_concrete[i as usize] {
-                    return Err(topo(format!(
+    }
+    v.sort_unstable();
+    v.dedup();
+    Ok(v)
+}
+
+/// The model ids of the nodes of mirror plane `group`. Mirror-plane faces
+/// belong to either side; a node on the plane gets the id of every side
+/// whose tets it touches, so an interface node lying in the plane is held
+/// through its steel original and its concrete twin.
+fn mirror_set(raw: &RawMesh, numbering: &Numbering, group: &str) -> Result<Vec<u32>, MeshError> {
+    let mut v = Vec::new();
+    for tri in raw.surfaces.get(group).map_or(&[][..], |v| v.as_slice()) {
+        for &i in tri {
+            let (steel, concrete) = (
+                numbering.in_steel[i as usize],
+                numbering.in_concrete[i as usize],
+            );
+            if !steel && !concrete {
+                return Err(topology_error(
+                    raw,
+                    format!(
                         "node {} of physical surface \"{group}\" belongs to no tet",
                         raw.node_tags[i as usize]
-                    )));
-                }
-                if in_steel[i as usize] {
-                    v.push(new_id[i as usize]);
-                }
-                if in_concrete[i as usize] {
-                    v.push(concrete_id(i));
-                }
+                    ),
+                ));
+            }
+            if steel {
+                v.push(numbering.new_id[i as usize]);
+            }
+            if concrete {
+                v.push(numbering.concrete_id(i));
             }
         }
-        v.sort_unstable();
-        v.dedup();
-        Ok(v)
-    };
+    }
+    v.sort_unstable();
+    v.dedup();
+    Ok(v)
+}
+
+/// The boundary-condition node sets and the symmetry the mirror-plane
+/// groups declare (both: quarter; none: full; one alone is an error).
+fn node_sets(raw: &RawMesh, numbering: &Numbering) -> Result<(NodeSets, Symmetry), MeshError> {
     let present = SYMMETRY_SURFACES.map(|g| raw.surfaces.get(g).is_some_and(|v| !v.is_empty()));
     let symmetry = match present {
         [true, true] => Symmetry::Quarter,
@@ -455,71 +610,23 @@ pub fn build_model(
             } else {
                 (SYMMETRY_SURFACES[1], SYMMETRY_SURFACES[0])
             };
-            return Err(missing(
+            return Err(missing_group(
+                raw,
                 lack,
                 &format!("a physical surface of triangles: \"{have}\" is present, and a quarter model needs both mirror planes"),
             ));
         }
     };
+    let set = |group: &str, side: Region| side_set(raw, numbering, group, side);
     let node_sets = NodeSets {
         bar_loaded_end: set("bar_loaded_end", Region::Steel)?,
         bar_free_end: set("bar_free_end", Region::Steel)?,
         concrete_bearing_face: set("concrete_bearing_face", Region::Concrete)?,
         concrete_free_face: set("concrete_free_face", Region::Concrete)?,
-        symmetry_x: mirror_set(SYMMETRY_SURFACES[0])?,
-        symmetry_y: mirror_set(SYMMETRY_SURFACES[1])?,
+        symmetry_x: mirror_set(raw, numbering, SYMMETRY_SURFACES[0])?,
+        symmetry_y: mirror_set(raw, numbering, SYMMETRY_SURFACES[1])?,
     };
-
-    let n_tets = tets.len() as f64;
-    let report = MeshReport {
-        nodes: nodes.len(),
-        tets_steel: steel.len(),
-        tets_concrete: concrete.len(),
-        interface_elements_adhesive: interfaces
-            .iter()
-            .filter(|e| e.zone == InterfaceZone::Adhesive)
-            .count(),
-        interface_elements_free: interfaces
-            .iter()
-            .filter(|e| e.zone == InterfaceZone::Free)
-            .count(),
-        duplicated_nodes: duplicated,
-        reoriented_tets: reoriented,
-        min_quality: quality.iter().copied().fold(f64::INFINITY, f64::min),
-        mean_quality: quality.iter().sum::<f64>() / n_tets,
-        tets_quality_below_0_1: quality.iter().filter(|&&q| q < 0.1).count(),
-        min_size_m: tet_size.iter().copied().fold(f64::INFINITY, f64::min),
-        max_size_m: tet_size.iter().copied().fold(0.0, f64::max),
-        interface_area_adhesive_m2: interfaces
-            .iter()
-            .filter(|e| e.zone == InterfaceZone::Adhesive)
-            .map(|e| e.area)
-            .sum(),
-        interface_area_free_m2: interfaces
-            .iter()
-            .filter(|e| e.zone == InterfaceZone::Free)
-            .map(|e| e.area)
-            .sum(),
-        volume_steel_m3: vol_s,
-        volume_concrete_m3: vol_c,
-        symmetry,
-        symmetry_nodes_x: node_sets.symmetry_x.len(),
-        symmetry_nodes_y: node_sets.symmetry_y.len(),
-        ..Default::default()
-    };
-    let model = Model {
-        nodes,
-        node_region,
-        tets,
-        tet_region,
-        tet_size,
-        interfaces,
-        node_sets,
-        bar_diameter,
-        adhesive_length,
-        symmetry,
-    };
-    Ok((model, report))
+    Ok((node_sets, symmetry))
 }
 
 fn centroid(nodes: &[V3], tri: &[u32; 3]) -> V3 {
