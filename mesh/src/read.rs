@@ -155,31 +155,7 @@ fn scan(data: &[u8]) -> ScanResult<Scan> {
         binary: false,
         size_t: 8,
     };
-    c.expect_line("$MeshFormat")?;
-    let version = c.token("format version")?;
-    if version != "4.1" {
-        return Err(format!("format version {version} (only 4.1 is read)"));
-    }
-    let file_type = c.int("file type")?;
-    let size_t: usize = c.int("data size")? as usize;
-    if size_t != 4 && size_t != 8 {
-        return Err(format!("unsupported size_t width {size_t}"));
-    }
-    c.size_t = size_t;
-    if file_type == 1 {
-        // A newline, then the integer 1 written in the file's byte order.
-        c.bytes(1, "header")?;
-        let one = c.bytes(4, "endianness marker")?;
-        if i32::from_le_bytes(one.try_into().expect("4 bytes")) != 1 {
-            return Err("big-endian binary files are not supported".into());
-        }
-    } else if file_type != 0 {
-        return Err(format!(
-            "file type {file_type} is neither ASCII (0) nor binary (1)"
-        ));
-    }
-    c.expect_line("$EndMeshFormat")?;
-
+    let file_type = c.header()?;
     let mut out = Scan {
         physical_names: HashMap::new(),
         node_block_tags: Vec::new(),
@@ -205,117 +181,23 @@ fn scan(data: &[u8]) -> ScanResult<Scan> {
             c.bytes(1, "section header newline")?;
         }
         match name.as_str() {
-            "PhysicalNames" => {
-                let n = c.size("number of physical names")?;
-                c.check_count(n, "number of physical names")?;
-                for _ in 0..n {
-                    let dim = c.int("physical group dimension")?;
-                    let tag = c.int("physical group tag")?;
-                    c.skip_ws();
-                    let rest = &data[c.pos..];
-                    let end = rest
-                        .iter()
-                        .position(|&b| b == b'\n')
-                        .ok_or("file ends inside $PhysicalNames")?;
-                    let name = String::from_utf8_lossy(&rest[..end])
-                        .trim()
-                        .trim_matches('"')
-                        .to_string();
-                    c.pos += end;
-                    out.physical_names.insert((dim, tag), name);
-                }
-            }
-            "Entities" => {
-                let np = c.size("number of points")?;
-                let nc = c.size("number of curves")?;
-                let ns = c.size("number of surfaces")?;
-                let nv = c.size("number of volumes")?;
-                c.check_count(np + nc + ns + nv, "number of entities")?;
-                for _ in 0..np {
-                    c.int("point tag")?;
-                    c.skip_values(3, 8, "point coordinates")?;
-                    let k = c.size("number of physical tags")?;
-                    c.skip_values(k, 4, "physical tags")?;
-                }
-                for what in [nc, ns, nv] {
-                    for _ in 0..what {
-                        c.int("entity tag")?;
-                        c.skip_values(6, 8, "entity bounding box")?;
-                        let k = c.size("number of physical tags")?;
-                        c.skip_values(k, 4, "physical tags")?;
-                        let k = c.size("number of bounding entities")?;
-                        c.skip_values(k, 4, "bounding entity tags")?;
-                    }
-                }
-            }
+            "PhysicalNames" => c.physical_names(&mut out)?,
+            "Entities" => c.entities()?,
             "Nodes" => {
                 if seen_nodes {
                     return Err("more than one $Nodes section".into());
                 }
                 seen_nodes = true;
-                let blocks = c.size("number of node blocks")?;
-                let total = c.size("number of nodes")?;
-                c.size("min node tag")?;
-                c.size("max node tag")?;
-                c.check_count(blocks, "number of node blocks")?;
-                c.check_count(total, "number of nodes")?;
-                let mut count = 0u64;
-                for b in 0..blocks {
-                    c.int("node block dimension")?;
-                    c.int("node block entity tag")?;
-                    if c.int("node block parametric flag")? != 0 {
-                        return Err(format!(
-                            "node block {} has parametric coordinates (not read)",
-                            b + 1
-                        ));
-                    }
-                    let n = c.size("number of nodes in block")?;
-                    c.check_count(n, "number of nodes in block")?;
-                    let mut tags = Vec::with_capacity(n as usize);
-                    for _ in 0..n {
-                        tags.push(c.size("node tag")?);
-                    }
-                    c.skip_values(3 * n, 8, "node coordinates")?;
-                    count += n;
-                    out.node_block_tags.push(tags);
-                }
-                if count != total {
-                    return Err(format!(
-                        "$Nodes announces {total} nodes, its blocks hold {count}"
-                    ));
-                }
+                c.nodes(&mut out)?;
             }
             "Elements" => {
                 if seen_elements {
                     return Err("more than one $Elements section".into());
                 }
                 seen_elements = true;
-                let blocks = c.size("number of element blocks")?;
-                c.size("number of elements")?;
-                c.size("min element tag")?;
-                c.size("max element tag")?;
-                c.check_count(blocks, "number of element blocks")?;
-                for b in 0..blocks {
-                    c.int("element block dimension")?;
-                    c.int("element block entity tag")?;
-                    let ty = c.int("element type")?;
-                    let n = c.size("number of elements in block")?;
-                    let per = nodes_per_element(ty).ok_or_else(|| {
-                        format!("element block {}: element type {ty} is not read", b + 1)
-                    })?;
-                    c.skip_values(n.saturating_mul(1 + per), size_t, "elements")?;
-                }
+                c.elements()?;
             }
-            _ => {
-                // Skip an unknown section by its end marker.
-                let end = format!("$End{name}");
-                let rest = &data[c.pos..];
-                let off = rest
-                    .windows(end.len())
-                    .position(|w| w == end.as_bytes())
-                    .ok_or_else(|| format!("file ends inside ${name}"))?;
-                c.pos += off;
-            }
+            _ => c.skip_section(&name)?,
         }
         c.binary = false;
         c.expect_line(&format!("$End{name}"))?;
@@ -327,6 +209,153 @@ fn scan(data: &[u8]) -> ScanResult<Scan> {
         return Err("no $Elements section".into());
     }
     Ok(out)
+}
+
+impl Cursor<'_> {
+    /// `$MeshFormat`: version 4.1, ASCII or little-endian binary; returns
+    /// the file type (0 ASCII, 1 binary) and sets the size_t width.
+    fn header(&mut self) -> ScanResult<i32> {
+        self.expect_line("$MeshFormat")?;
+        let version = self.token("format version")?;
+        if version != "4.1" {
+            return Err(format!("format version {version} (only 4.1 is read)"));
+        }
+        let file_type = self.int("file type")?;
+        let size_t: usize = self.int("data size")? as usize;
+        if size_t != 4 && size_t != 8 {
+            return Err(format!("unsupported size_t width {size_t}"));
+        }
+        self.size_t = size_t;
+        if file_type == 1 {
+            // A newline, then the integer 1 written in the file's byte order.
+            self.bytes(1, "header")?;
+            let one = self.bytes(4, "endianness marker")?;
+            if i32::from_le_bytes(one.try_into().expect("4 bytes")) != 1 {
+                return Err("big-endian binary files are not supported".into());
+            }
+        } else if file_type != 0 {
+            return Err(format!(
+                "file type {file_type} is neither ASCII (0) nor binary (1)"
+            ));
+        }
+        self.expect_line("$EndMeshFormat")?;
+        Ok(file_type)
+    }
+
+    fn physical_names(&mut self, out: &mut Scan) -> ScanResult<()> {
+        let n = self.size("number of physical names")?;
+        self.check_count(n, "number of physical names")?;
+        for _ in 0..n {
+            let dim = self.int("physical group dimension")?;
+            let tag = self.int("physical group tag")?;
+            self.skip_ws();
+            let rest = &self.data[self.pos..];
+            let end = rest
+                .iter()
+                .position(|&b| b == b'\n')
+                .ok_or("file ends inside $PhysicalNames")?;
+            let name = String::from_utf8_lossy(&rest[..end])
+                .trim()
+                .trim_matches('"')
+                .to_string();
+            self.pos += end;
+            out.physical_names.insert((dim, tag), name);
+        }
+        Ok(())
+    }
+
+    /// `$Entities` is only checked and skipped.
+    fn entities(&mut self) -> ScanResult<()> {
+        let np = self.size("number of points")?;
+        let nc = self.size("number of curves")?;
+        let ns = self.size("number of surfaces")?;
+        let nv = self.size("number of volumes")?;
+        self.check_count(np + nc + ns + nv, "number of entities")?;
+        for _ in 0..np {
+            self.int("point tag")?;
+            self.skip_values(3, 8, "point coordinates")?;
+            let k = self.size("number of physical tags")?;
+            self.skip_values(k, 4, "physical tags")?;
+        }
+        for what in [nc, ns, nv] {
+            for _ in 0..what {
+                self.int("entity tag")?;
+                self.skip_values(6, 8, "entity bounding box")?;
+                let k = self.size("number of physical tags")?;
+                self.skip_values(k, 4, "physical tags")?;
+                let k = self.size("number of bounding entities")?;
+                self.skip_values(k, 4, "bounding entity tags")?;
+            }
+        }
+        Ok(())
+    }
+
+    /// `$Nodes`: the node tags of each block (coordinates are skipped).
+    fn nodes(&mut self, out: &mut Scan) -> ScanResult<()> {
+        let blocks = self.size("number of node blocks")?;
+        let total = self.size("number of nodes")?;
+        self.size("min node tag")?;
+        self.size("max node tag")?;
+        self.check_count(blocks, "number of node blocks")?;
+        self.check_count(total, "number of nodes")?;
+        let mut count = 0u64;
+        for b in 0..blocks {
+            self.int("node block dimension")?;
+            self.int("node block entity tag")?;
+            if self.int("node block parametric flag")? != 0 {
+                return Err(format!(
+                    "node block {} has parametric coordinates (not read)",
+                    b + 1
+                ));
+            }
+            let n = self.size("number of nodes in block")?;
+            self.check_count(n, "number of nodes in block")?;
+            let mut tags = Vec::with_capacity(n as usize);
+            for _ in 0..n {
+                tags.push(self.size("node tag")?);
+            }
+            self.skip_values(3 * n, 8, "node coordinates")?;
+            count += n;
+            out.node_block_tags.push(tags);
+        }
+        if count != total {
+            return Err(format!(
+                "$Nodes announces {total} nodes, its blocks hold {count}"
+            ));
+        }
+        Ok(())
+    }
+
+    /// `$Elements`: only the element types and counts are checked.
+    fn elements(&mut self) -> ScanResult<()> {
+        let blocks = self.size("number of element blocks")?;
+        self.size("number of elements")?;
+        self.size("min element tag")?;
+        self.size("max element tag")?;
+        self.check_count(blocks, "number of element blocks")?;
+        for b in 0..blocks {
+            self.int("element block dimension")?;
+            self.int("element block entity tag")?;
+            let ty = self.int("element type")?;
+            let n = self.size("number of elements in block")?;
+            let per = nodes_per_element(ty)
+                .ok_or_else(|| format!("element block {}: element type {ty} is not read", b + 1))?;
+            self.skip_values(n.saturating_mul(1 + per), self.size_t, "elements")?;
+        }
+        Ok(())
+    }
+
+    /// Skips an unknown section by its end marker.
+    fn skip_section(&mut self, name: &str) -> ScanResult<()> {
+        let end = format!("$End{name}");
+        let rest = &self.data[self.pos..];
+        let off = rest
+            .windows(end.len())
+            .position(|w| w == end.as_bytes())
+            .ok_or_else(|| format!("file ends inside ${name}"))?;
+        self.pos += off;
+        Ok(())
+    }
 }
 
 /// Nodes per element for the gmsh element types a specimen mesh can hold.
