@@ -478,6 +478,50 @@ pub fn run(test: &MaterialTest) -> Result<PointTable, MaterialPointError> {
             detail: "needs at least two rows (start and end)".into(),
         });
     }
+    let held = held_stresses(test, stresses)?;
+    let points = path_points(test, bulk, names, stresses, &held)?;
+    let columns = table_columns(&law, names, stresses);
+
+    let mut bulk_state = BulkState::default();
+    let mut iface_state = InterfaceState::default();
+    let mut x = points[0].1.clone();
+    let mut scale = held.iter().map(|(_, v)| v.abs()).fold(1.0, f64::max);
+    let mut rows = Vec::new();
+    let first = evaluate(
+        &law,
+        &bulk_state,
+        &iface_state,
+        &mut x,
+        &held,
+        scale,
+        points[0].0,
+    )?;
+    rows.push(table_row(&law, points[0].0, &x, &first));
+    for seg in points.windows(2) {
+        let ((t0, a), (t1, b)) = (&seg[0], &seg[1]);
+        for step in 1..=test.increments {
+            let f = step as f64 / test.increments as f64;
+            let t = t0 + f * (t1 - t0);
+            for k in 0..n {
+                if !held.iter().any(|(h, _)| *h == k) {
+                    x[k] = a[k] + f * (b[k] - a[k]);
+                }
+            }
+            let s = evaluate(&law, &bulk_state, &iface_state, &mut x, &held, scale, t)?;
+            scale = s.stress.iter().fold(scale, |m, v| m.max(v.abs()));
+            bulk_state = s.bulk_state;
+            iface_state = s.iface_state;
+            rows.push(table_row(&law, t, &x, &s));
+        }
+    }
+    Ok(PointTable { columns, rows })
+}
+
+/// The stress components the test holds (index among `stresses`, Pa).
+fn held_stresses(
+    test: &MaterialTest,
+    stresses: &[&str],
+) -> Result<Vec<(usize, f64)>, MaterialPointError> {
     let mut held = Vec::new();
     for (name, q) in &test.stress {
         let key = format!("stress.{name}");
@@ -498,7 +542,19 @@ pub fn run(test: &MaterialTest) -> Result<PointTable, MaterialPointError> {
                 .map_err(MaterialsSpecError::from)?,
         ));
     }
-    // Rows as full vectors: unnamed components keep their last value.
+    Ok(held)
+}
+
+/// The path's rows as full vectors (t, components): unnamed components
+/// keep their last value; held components may not be imposed.
+fn path_points(
+    test: &MaterialTest,
+    bulk: bool,
+    names: &[&str],
+    stresses: &[&str],
+    held: &[(usize, f64)],
+) -> Result<Vec<(f64, Vec<f64>)>, MaterialPointError> {
+    let n = names.len();
     let mut points: Vec<(f64, Vec<f64>)> = Vec::new();
     let mut current = vec![0.0; n];
     for (i, row) in test.path.iter().enumerate() {
@@ -530,13 +586,19 @@ pub fn run(test: &MaterialTest) -> Result<PointTable, MaterialPointError> {
         points.push((row.t, current.clone()));
     }
 
+    Ok(points)
+}
+
+/// The table's columns: t, the strain or jump components, the stresses,
+/// D and the law's own state variables.
+fn table_columns(law: &PointLaw, names: &[&str], stresses: &[&str]) -> Vec<String> {
     let mut columns: Vec<String> = std::iter::once("t")
         .chain(names.iter().copied())
         .chain(stresses.iter().copied())
         .chain(std::iter::once("D"))
         .map(String::from)
         .collect();
-    match &law {
+    match law {
         PointLaw::Bulk(AnyBulkLaw::Mazars(_)) => columns.push("kappa".into()),
         PointLaw::Bulk(AnyBulkLaw::J2(_)) => {
             columns.extend(["epxx", "epyy", "epzz", "epxy", "epyz", "epxz"].map(String::from))
@@ -547,72 +609,42 @@ pub fn run(test: &MaterialTest) -> Result<PointTable, MaterialPointError> {
             columns.extend(["lambda_tilde", "slip_t", "slip_h"].map(String::from))
         }
     }
+    columns
+}
 
-    let mut bulk_state = BulkState::default();
-    let mut iface_state = InterfaceState::default();
-    let mut x = points[0].1.clone();
-    let mut scale = held.iter().map(|(_, v)| v.abs()).fold(1.0, f64::max);
-    let mut rows = Vec::new();
-    let record = |t: f64, x: &[f64], s: &Solved, rows: &mut Vec<Vec<f64>>| {
-        let mut row = vec![t];
-        // Strain output in tensor components.
-        row.extend(
-            x.iter()
+/// One table row (see [`table_columns`]); strains in tensor components.
+fn table_row(law: &PointLaw, t: f64, x: &[f64], s: &Solved) -> Vec<f64> {
+    let bulk = matches!(law, PointLaw::Bulk(_));
+    let mut row = vec![t];
+    // Strain output in tensor components.
+    row.extend(
+        x.iter()
+            .enumerate()
+            .map(|(k, v)| if bulk && k >= 3 { v / 2.0 } else { *v }),
+    );
+    row.extend(&s.stress);
+    row.push(if bulk {
+        s.bulk_state.damage
+    } else {
+        s.iface_state.damage
+    });
+    match law {
+        PointLaw::Bulk(AnyBulkLaw::Mazars(_)) => row.push(s.bulk_state.kappa),
+        PointLaw::Bulk(AnyBulkLaw::J2(_)) => row.extend(
+            s.bulk_state
+                .plastic_strain
+                .iter()
                 .enumerate()
-                .map(|(k, v)| if bulk && k >= 3 { v / 2.0 } else { *v }),
-        );
-        row.extend(&s.stress);
-        row.push(if bulk {
-            s.bulk_state.damage
-        } else {
-            s.iface_state.damage
-        });
-        match &law {
-            PointLaw::Bulk(AnyBulkLaw::Mazars(_)) => row.push(s.bulk_state.kappa),
-            PointLaw::Bulk(AnyBulkLaw::J2(_)) => row.extend(
-                s.bulk_state
-                    .plastic_strain
-                    .iter()
-                    .enumerate()
-                    .map(|(k, v)| if k >= 3 { v / 2.0 } else { *v }),
-            ),
-            PointLaw::Interface(AnyInterfaceLaw::Elastic(_))
-            | PointLaw::Bulk(AnyBulkLaw::Elastic(_)) => {}
-            PointLaw::Interface(_) => {
-                row.push(s.iface_state.lambda_max);
-                row.extend(s.iface_state.slip);
-            }
-        }
-        rows.push(row);
-    };
-    let first = evaluate(
-        &law,
-        &bulk_state,
-        &iface_state,
-        &mut x,
-        &held,
-        scale,
-        points[0].0,
-    )?;
-    record(points[0].0, &x, &first, &mut rows);
-    for seg in points.windows(2) {
-        let ((t0, a), (t1, b)) = (&seg[0], &seg[1]);
-        for step in 1..=test.increments {
-            let f = step as f64 / test.increments as f64;
-            let t = t0 + f * (t1 - t0);
-            for k in 0..n {
-                if !held.iter().any(|(h, _)| *h == k) {
-                    x[k] = a[k] + f * (b[k] - a[k]);
-                }
-            }
-            let s = evaluate(&law, &bulk_state, &iface_state, &mut x, &held, scale, t)?;
-            scale = s.stress.iter().fold(scale, |m, v| m.max(v.abs()));
-            bulk_state = s.bulk_state;
-            iface_state = s.iface_state;
-            record(t, &x, &s, &mut rows);
+                .map(|(k, v)| if k >= 3 { v / 2.0 } else { *v }),
+        ),
+        PointLaw::Interface(AnyInterfaceLaw::Elastic(_))
+        | PointLaw::Bulk(AnyBulkLaw::Elastic(_)) => {}
+        PointLaw::Interface(_) => {
+            row.push(s.iface_state.lambda_max);
+            row.extend(s.iface_state.slip);
         }
     }
-    Ok(PointTable { columns, rows })
+    row
 }
 
 /// Reads and runs a test file; errors name the file.
