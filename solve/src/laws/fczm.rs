@@ -132,21 +132,43 @@ impl Fczm {
     }
 }
 
-impl InterfaceLaw for Fczm {
-    fn step(
-        &self,
-        committed: &InterfaceState,
-        jump: &Vector3<f64>,
-        kind: TangentKind,
-    ) -> Result<InterfaceResponse, LawError> {
-        const LAW: &str = "fczm";
-        check_finite(LAW, "jump", jump.as_slice())?;
-        let (kn, ks) = (self.normal_stiffness(), self.shear_stiffness());
-        let c = self.tensile_strength / (self.zeta * self.fracture_energy);
-        let un = jump[0];
-        let us = Vector2::new(jump[1], jump[2]);
+/// The damage of a step (A.2–A.4, 22) and its derivatives in the jump.
+#[derive(Debug, Clone, Copy)]
+struct Damage {
+    /// λ̃ of the step, m.
+    lt: f64,
+    /// ∂(λ̃ + λ_0)/∂u (zero unless damage grows).
+    dbig: Vector3<f64>,
+    /// 1 − D and its derivative.
+    q: f64,
+    dq: Vector3<f64>,
+    d: f64,
+    dd: Vector3<f64>,
+    /// λ_0/λ and its derivative.
+    r: f64,
+    dr: Vector3<f64>,
+    /// Whether D sits at its floor `min_damage` (then q = `floor_q`).
+    floored: bool,
+    floor_q: f64,
+    /// f_t / (ζ G_f), 1/m.
+    c: f64,
+}
 
-        // Damage indicator and damage (A.2–A.4, 22).
+/// The undamaged part's normal traction N = K_n (P_o u_n + (P_c − P_o)⟨u_n⟩₋)
+/// with P_o = (1 − D)λ_0/λ (open) and P_c = (1 − D)β (closed), and the
+/// shear weight P_s = (1 − D)α (23–26). `normal_slope` is ∂N/∂u_n at fixed
+/// history, `normal_history` the rest of ∂N/∂u (through λ̃ while damage grows).
+struct Undamaged {
+    normal: f64,
+    normal_slope: f64,
+    normal_history: Vector3<f64>,
+    ps: f64,
+    dps: Vector3<f64>,
+}
+
+impl Fczm {
+    fn damage(&self, committed: &InterfaceState, jump: &Vector3<f64>) -> Damage {
+        let c = self.tensile_strength / (self.zeta * self.fracture_energy);
         let (lam, dlam) = opening(jump, self.delta_s);
         let loading = lam - self.lambda0 > committed.lambda_max;
         let lt = if loading {
@@ -169,24 +191,42 @@ impl InterfaceLaw for Fczm {
         let dd = -dq;
         let r = self.lambda0 / big;
         let dr = dbig * (-self.lambda0 / (big * big));
+        Damage {
+            lt,
+            dbig,
+            q,
+            dq,
+            d,
+            dd,
+            r,
+            dr,
+            floored,
+            floor_q,
+            c,
+        }
+    }
 
-        // Damaged part: no tension, Coulomb friction (16–21).
-        let (closed, dclosed) = contact_ramp(un, self.contact_smoothing);
-        let sdn = kn * closed;
-        let dsdn = kn * dclosed;
-        let ret = slip_return(
-            us,
-            Vector2::new(committed.slip[0], committed.slip[1]),
-            ks,
-            -self.friction * sdn,
-        );
-
-        // Undamaged part (23–26): the normal traction
-        // N = K_n (P_o u_n + (P_c − P_o)⟨u_n⟩₋) with P_o = (1 − D)λ_0/λ (open)
-        // and P_c = (1 − D)β (closed), and the shear weight P_s = (1 − D)α.
+    fn undamaged(
+        &self,
+        dmg: &Damage,
+        un: f64,
+        (closed, dclosed): (f64, f64),
+        (sdn, dsdn): (f64, f64),
+    ) -> Undamaged {
+        let kn = self.normal_stiffness();
         let e_n = Vector3::new(1.0, 0.0, 0.0);
-        // `normal_slope` is ∂N/∂u_n at fixed history, `normal_history` the
-        // rest of ∂N/∂u (through λ̃ while damage grows).
+        let Damage {
+            lt,
+            q,
+            dq,
+            r,
+            dr,
+            dbig,
+            floored,
+            floor_q,
+            c,
+            ..
+        } = *dmg;
         let (normal, normal_slope, normal_history, ps, dps);
         if q >= 1.0 {
             (normal, normal_slope, normal_history) = (kn * un, kn, Vector3::zeros());
@@ -227,6 +267,52 @@ impl InterfaceLaw for Fczm {
                 dps = dq * a + da * q;
             }
         }
+
+        Undamaged {
+            normal,
+            normal_slope,
+            normal_history,
+            ps,
+            dps,
+        }
+    }
+}
+
+impl InterfaceLaw for Fczm {
+    fn step(
+        &self,
+        committed: &InterfaceState,
+        jump: &Vector3<f64>,
+        kind: TangentKind,
+    ) -> Result<InterfaceResponse, LawError> {
+        const LAW: &str = "fczm";
+        check_finite(LAW, "jump", jump.as_slice())?;
+        let (kn, ks) = (self.normal_stiffness(), self.shear_stiffness());
+        let un = jump[0];
+        let us = Vector2::new(jump[1], jump[2]);
+
+        let dmg = self.damage(committed, jump);
+        let Damage { lt, d, dd, .. } = dmg;
+
+        // Damaged part: no tension, Coulomb friction (16–21).
+        let (closed, dclosed) = contact_ramp(un, self.contact_smoothing);
+        let sdn = kn * closed;
+        let dsdn = kn * dclosed;
+        let ret = slip_return(
+            us,
+            Vector2::new(committed.slip[0], committed.slip[1]),
+            ks,
+            -self.friction * sdn,
+        );
+
+        let Undamaged {
+            normal,
+            normal_slope,
+            normal_history,
+            ps,
+            dps,
+        } = self.undamaged(&dmg, un, (closed, dclosed), (sdn, dsdn));
+        let e_n = Vector3::new(1.0, 0.0, 0.0);
 
         let traction = Vector3::new(
             d * sdn + normal,
