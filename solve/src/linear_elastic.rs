@@ -2,7 +2,7 @@
 //! mesh stage's model with every concrete interface twin merged back onto
 //! its steel node (no interface elements: steel and concrete share the
 //! interface nodes), P1 elasticity, the pull-out's boundary conditions
-//! (SPEC §2, the same as `pullout::pullout_conditions`) and the reaction
+//! (SPEC §2: `pullout::pullout_conditions` itself, on the merged nodes) and the reaction
 //! force on the bar's loaded end for an imposed displacement.
 //!
 //! Two linear solvers: faer's sparse Cholesky with METIS ordering
@@ -13,9 +13,41 @@ use crate::amg::{amg_pcg, Amg, AmgError, AmgParams, Bsr};
 use crate::element::{ElementError, TetGeometry};
 use crate::laws::elastic::LinearElastic;
 use crate::linear::{Cholesky, LinearError, Ordering};
+use crate::problems::pullout::pullout_conditions;
 use mesh::{Model, Region, Symmetry};
 use rayon::prelude::*;
 use std::time::Instant;
+
+/// The model's nodes with every concrete interface twin merged onto its
+/// steel node: the new id of each model node, and the merged coordinates.
+fn merged_nodes(model: &Model) -> (Vec<u32>, Vec<[f64; 3]>) {
+    let n = model.nodes.len();
+    let mut target: Vec<u32> = (0..n as u32).collect();
+    for e in &model.interfaces {
+        for p in 0..3 {
+            target[e.nodes[p + 3] as usize] = e.nodes[p];
+        }
+    }
+    // Chains c → s → … cannot occur (a steel node is never a concrete
+    // twin), but resolve them anyway so the map is idempotent.
+    for i in 0..n {
+        let mut t = target[i];
+        while target[t as usize] != t {
+            t = target[t as usize];
+        }
+        target[i] = t;
+    }
+    let mut kept = vec![u32::MAX; n];
+    let mut nodes = Vec::new();
+    for i in 0..n {
+        if target[i] as usize == i {
+            kept[i] = nodes.len() as u32;
+            nodes.push(model.nodes[i]);
+        }
+    }
+    let new_id = (0..n).map(|i| kept[target[i] as usize]).collect();
+    (new_id, nodes)
+}
 
 /// Why the perfect-bond problem could not be built or solved.
 #[derive(Debug, thiserror::Error)]
@@ -44,22 +76,16 @@ pub struct PerfectBond {
     pub tet_region: Vec<Region>,
     /// Steel nodes of the bar's loaded end (imposed u_z, u_x = u_y = 0).
     pub loaded_end: Vec<u32>,
-    /// Nodes of the concrete bearing face (u_z = 0).
-    pub bearing_face: Vec<u32>,
     /// Constrained global DOFs (3·node + component), sorted, unique, and
-    /// their values (m) for the imposed displacement `u_imposed`.
+    /// their values (m) for the imposed displacement `u_imposed`: the
+    /// pull-out's conditions (`pullout::pullout_conditions`) on the merged
+    /// nodes.
     pub constrained: Vec<(usize, f64)>,
     /// Imposed displacement of the loaded end, m.
     pub u_imposed: f64,
     /// Whole-specimen force per force on the model (4 for a quarter).
     pub force_factor: f64,
     pub symmetry: Symmetry,
-    /// Nodes with one component held by the lateral point constraints of
-    /// the full model: (node, components), for exporters.
-    pub point_constraints: Vec<(u32, Vec<usize>)>,
-    /// Nodes held normal to the mirror planes x = 0 and y = 0 (quarter).
-    pub symmetry_x: Vec<u32>,
-    pub symmetry_y: Vec<u32>,
 }
 
 impl PerfectBond {
@@ -74,103 +100,33 @@ impl PerfectBond {
                 "imposed displacement {u_imposed} m is not finite"
             )));
         }
-        let n = model.nodes.len();
-        let mut target: Vec<u32> = (0..n as u32).collect();
-        for e in &model.interfaces {
-            for p in 0..3 {
-                target[e.nodes[p + 3] as usize] = e.nodes[p];
-            }
-        }
-        // Chains c → s → … cannot occur (a steel node is never a concrete
-        // twin), but resolve them anyway so the map is idempotent.
-        for i in 0..n {
-            let mut t = target[i];
-            while target[t as usize] != t {
-                t = target[t as usize];
-            }
-            target[i] = t;
-        }
-        let mut new_id = vec![u32::MAX; n];
-        let mut nodes = Vec::new();
-        for i in 0..n {
-            if target[i] as usize == i {
-                new_id[i] = nodes.len() as u32;
-                nodes.push(model.nodes[i]);
-            }
-        }
-        let map = |i: u32| new_id[target[i as usize] as usize];
+        let (new_id, nodes) = merged_nodes(model);
+        let map = |i: u32| new_id[i as usize];
         let tets: Vec<[u32; 4]> = model.tets.iter().map(|t| t.map(map)).collect();
-        let set = |v: &[u32]| {
-            let mut s: Vec<u32> = v.iter().map(|&i| map(i)).collect();
-            s.sort_unstable();
-            s.dedup();
-            s
-        };
-        let sets = &model.node_sets;
-        let loaded_end = set(&sets.bar_loaded_end);
-        let bearing_face = set(&sets.concrete_bearing_face);
-        let symmetry_x = set(&sets.symmetry_x);
-        let symmetry_y = set(&sets.symmetry_y);
-        if loaded_end.is_empty() || bearing_face.is_empty() {
-            return Err(LinearElasticError::Model(
-                "node sets bar_loaded_end and concrete_bearing_face must not be empty".into(),
-            ));
-        }
-        let mut fixed: Vec<(usize, f64)> = Vec::new();
-        for &i in &loaded_end {
-            let d = 3 * i as usize;
-            fixed.extend([(d, 0.0), (d + 1, 0.0), (d + 2, u_imposed)]);
-        }
-        for &i in &bearing_face {
-            fixed.push((3 * i as usize + 2, 0.0));
-        }
-        let mut point_constraints = Vec::new();
-        match model.symmetry {
-            Symmetry::Quarter => {
-                if symmetry_x.is_empty() || symmetry_y.is_empty() {
-                    return Err(LinearElasticError::Model(
-                        "quarter model without symmetry_x / symmetry_y node sets".into(),
-                    ));
-                }
-                fixed.extend(symmetry_x.iter().map(|&i| (3 * i as usize, 0.0)));
-                fixed.extend(symmetry_y.iter().map(|&i| (3 * i as usize + 1, 0.0)));
-            }
-            Symmetry::Full => {
-                // Lateral rigid modes, as in the pull-out: the bearing-face
-                // node of smallest x (ties: smallest y) holds u_x, u_y; the
-                // one of largest x holds u_y.
-                let x = |i: &u32| nodes[*i as usize];
-                let a = *bearing_face
-                    .iter()
-                    .min_by(|p, q| {
-                        x(p)[0]
-                            .total_cmp(&x(q)[0])
-                            .then(x(p)[1].total_cmp(&x(q)[1]))
-                    })
-                    .expect("checked non-empty");
-                let b = *bearing_face
-                    .iter()
-                    .max_by(|p, q| x(p)[0].total_cmp(&x(q)[0]))
-                    .expect("checked non-empty");
-                if x(&b)[0] <= x(&a)[0] {
-                    return Err(LinearElasticError::Model(
-                        "concrete_bearing_face has no extent in x".into(),
-                    ));
-                }
-                fixed.extend([(3 * a as usize, 0.0), (3 * a as usize + 1, 0.0)]);
-                fixed.push((3 * b as usize + 1, 0.0));
-                point_constraints.push((a, vec![0, 1]));
-                point_constraints.push((b, vec![1]));
-            }
-        }
-        // The first condition on a DOF wins (the grip over the bearing face
-        // where they meet), as in the pull-out.
+        let mut loaded_end: Vec<u32> = model
+            .node_sets
+            .bar_loaded_end
+            .iter()
+            .map(|&i| map(i))
+            .collect();
+        loaded_end.sort_unstable();
+        loaded_end.dedup();
+        let (dirichlet, _) =
+            pullout_conditions(model).map_err(|e| LinearElasticError::Model(e.to_string()))?;
+        // The first condition on a merged DOF wins (the grip over the
+        // bearing face where they meet), as in the pull-out.
         let mut seen = vec![false; 3 * nodes.len()];
-        let mut constrained = Vec::with_capacity(fixed.len());
-        for (d, v) in fixed {
+        let mut constrained = Vec::with_capacity(dirichlet.dofs.len());
+        for ((&dof, &base), &rate) in dirichlet
+            .dofs
+            .iter()
+            .zip(&dirichlet.base)
+            .zip(&dirichlet.rate)
+        {
+            let d = 3 * map((dof / 3) as u32) as usize + dof % 3;
             if !seen[d] {
                 seen[d] = true;
-                constrained.push((d, v));
+                constrained.push((d, base + u_imposed * rate));
             }
         }
         constrained.sort_unstable_by_key(|c| c.0);
@@ -179,14 +135,10 @@ impl PerfectBond {
             tets,
             tet_region: model.tet_region.clone(),
             loaded_end,
-            bearing_face,
             constrained,
             u_imposed,
             force_factor: model.symmetry.force_factor(),
             symmetry: model.symmetry,
-            point_constraints,
-            symmetry_x,
-            symmetry_y,
         })
     }
 

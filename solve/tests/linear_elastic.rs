@@ -257,14 +257,25 @@ fn merging_twins_restores_the_conforming_problem() {
 
 /// SPEC §2 boundary conditions: the loaded end holds u_z = λ and u_x = u_y = 0,
 /// the bearing face u_z = 0, and the full model adds 3 lateral point
-/// constraints; the response is linear in λ.
+/// constraints, exactly those of the nonlinear pull-out; the response is
+/// linear in λ.
 #[test]
 fn conditions_and_linearity() {
     let m = specimen(6, 6);
     let p = PerfectBond::from_model(&m, 2e-5).unwrap();
     let loaded = p.loaded_end.len();
-    let bearing = p.bearing_face.len();
+    let bearing = m.node_sets.concrete_bearing_face.len();
     assert_eq!(p.constrained.len(), 3 * loaded + bearing + 3);
+    // The conforming specimen has no twins: the pull-out's DOFs as they are.
+    let (dir, _) = solve::problems::pullout::pullout_conditions(&m).unwrap();
+    let mut expected: Vec<(usize, f64)> = dir
+        .dofs
+        .iter()
+        .zip(dir.base.iter().zip(&dir.rate))
+        .map(|(&d, (&b, &r))| (d, b + 2e-5 * r))
+        .collect();
+    expected.sort_unstable_by_key(|c| c.0);
+    assert_eq!(p.constrained, expected);
     for &n in &p.loaded_end {
         let d = 3 * n as usize;
         let v = |dof: usize| p.constrained.iter().find(|c| c.0 == dof).map(|c| c.1);
