@@ -120,68 +120,8 @@ impl Study {
         if !base.is_file() {
             return Err(invalid(format!("base: {} is not a file", base.display())));
         }
-        let mut keys = Vec::new();
-        let mut lists = Vec::new();
-        for (k, v) in &raw.parameters {
-            let key = k
-                .as_str()
-                .ok_or_else(|| invalid(format!("parameters: key {k:?} is not a dotted spec key")))?
-                .to_string();
-            let values = v
-                .as_sequence()
-                .filter(|s| !s.is_empty())
-                .ok_or_else(|| {
-                    invalid(format!(
-                        "parameters.{key}: expected a non-empty list of values"
-                    ))
-                })?
-                .clone();
-            keys.push(key);
-            lists.push(values);
-        }
-        if keys.is_empty() {
-            return Err(invalid(
-                "parameters: at least one key with a list of values".into(),
-            ));
-        }
-        if raw.kind == StudyKind::Convergence && keys.len() != 1 {
-            return Err(invalid(format!(
-                "parameters: a convergence study varies one size key (e.g. mesh.h_interface), found {}",
-                keys.len()
-            )));
-        }
-        if raw.kind == StudyKind::Convergence && lists[0].len() < 3 {
-            return Err(invalid(format!(
-                "parameters.{}: a convergence study needs at least 3 grids, found {}",
-                keys[0],
-                lists[0].len()
-            )));
-        }
-        let combos: Vec<Vec<serde_yaml::Value>> = match raw.combine {
-            Combine::Zip => {
-                let n = lists[0].len();
-                if let Some((k, l)) = keys.iter().zip(&lists).find(|(_, l)| l.len() != n) {
-                    return Err(invalid(format!(
-                        "parameters.{k}: zipped lists must have equal lengths ({} vs {n})",
-                        l.len()
-                    )));
-                }
-                (0..n)
-                    .map(|i| lists.iter().map(|l| l[i].clone()).collect())
-                    .collect()
-            }
-            Combine::Product => lists.iter().fold(vec![Vec::new()], |acc, list| {
-                acc.iter()
-                    .flat_map(|prefix| {
-                        list.iter().map(move |v| {
-                            let mut c = prefix.clone();
-                            c.push(v.clone());
-                            c
-                        })
-                    })
-                    .collect()
-            }),
-        };
+        let (keys, lists) = parameter_lists(&raw, &invalid)?;
+        let combos = combinations(raw.combine, &keys, &lists, &invalid)?;
         let common: Vec<String> = raw
             .set
             .iter()
@@ -217,6 +157,86 @@ impl Study {
             cases,
         })
     }
+}
+
+/// The study's varied keys and their value lists, checked against its kind.
+fn parameter_lists(
+    raw: &RawStudy,
+    invalid: &dyn Fn(String) -> StudyError,
+) -> Result<(Vec<String>, Vec<Vec<serde_yaml::Value>>), StudyError> {
+    let mut keys = Vec::new();
+    let mut lists = Vec::new();
+    for (k, v) in &raw.parameters {
+        let key = k
+            .as_str()
+            .ok_or_else(|| invalid(format!("parameters: key {k:?} is not a dotted spec key")))?
+            .to_string();
+        let values = v
+            .as_sequence()
+            .filter(|s| !s.is_empty())
+            .ok_or_else(|| {
+                invalid(format!(
+                    "parameters.{key}: expected a non-empty list of values"
+                ))
+            })?
+            .clone();
+        keys.push(key);
+        lists.push(values);
+    }
+    if keys.is_empty() {
+        return Err(invalid(
+            "parameters: at least one key with a list of values".into(),
+        ));
+    }
+    if raw.kind == StudyKind::Convergence && keys.len() != 1 {
+        return Err(invalid(format!(
+            "parameters: a convergence study varies one size key (e.g. mesh.h_interface), found {}",
+            keys.len()
+        )));
+    }
+    if raw.kind == StudyKind::Convergence && lists[0].len() < 3 {
+        return Err(invalid(format!(
+            "parameters.{}: a convergence study needs at least 3 grids, found {}",
+            keys[0],
+            lists[0].len()
+        )));
+    }
+    Ok((keys, lists))
+}
+
+/// One list of values per case: the lists side by side (`zip`) or every
+/// combination (`product`).
+fn combinations(
+    combine: Combine,
+    keys: &[String],
+    lists: &[Vec<serde_yaml::Value>],
+    invalid: &dyn Fn(String) -> StudyError,
+) -> Result<Vec<Vec<serde_yaml::Value>>, StudyError> {
+    Ok(match combine {
+        Combine::Zip => {
+            let n = lists[0].len();
+            if let Some((k, l)) = keys.iter().zip(lists).find(|(_, l)| l.len() != n) {
+                return Err(invalid(format!(
+                    "parameters.{k}: zipped lists must have equal lengths ({} vs {n})",
+                    l.len()
+                )));
+            }
+            (0..n)
+                .map(|i| lists.iter().map(|l| l[i].clone()).collect())
+                .collect()
+        }
+        Combine::Product => lists.iter().fold(vec![Vec::new()], |acc, list| {
+            acc.iter()
+                .flat_map(|prefix| {
+                    list.iter().map(move |v| {
+                        let mut c = prefix.clone();
+                        c.push(v.clone());
+                        c
+                    })
+                })
+                .collect()
+        }),
+    })
 }
 
 #[cfg(test)]
