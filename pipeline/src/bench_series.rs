@@ -287,98 +287,9 @@ pub fn mesh_series(args: &BenchArgs, printer: &Printer) -> Result<ExitCode> {
     let mut series_plot: Vec<ErrorTimeSeries> = Vec::new();
     let mut any = false;
     for s in plan {
-        let mut records = Vec::new();
-        for &h in &s.sizes {
-            let mut o = s.extra.clone();
-            o.extend(args.overrides.iter().cloned());
-            o.push(format!("mesh.h_interface=\"{} mm\"", h * 1e3));
-            let name = format!("bench-mesh-{}-{:.0}um", s.label.to_lowercase(), h * 1e6);
-            printer.line(&format!(
-                "mesh series {}: h_interface = {} mm",
-                s.label,
-                h * 1e3
-            ));
-            let rec = run_and_read(&s.spec, &o, &name, &work, printer);
-            any |= !rec.curve.is_empty();
-            records.push((h, rec));
-        }
-        let grid = |q: fn(&RunRecord) -> Option<f64>| -> Vec<GridResult> {
-            records
-                .iter()
-                .filter_map(|(h, r)| {
-                    Some(GridResult {
-                        h: *h,
-                        value: q(r)?,
-                        dofs: r.dofs,
-                        wall_time: r.total_time(),
-                    })
-                })
-                .collect()
-        };
-        let peak = post::convergence_study("peak σ_mb", &grid(|r| r.peak)).ok();
-        let energy = post::convergence_study("energy", &grid(|r| r.energy)).ok();
-        let row_of = |study: &Option<post::ConvergenceStudy>, h: f64| {
-            study
-                .as_ref()
-                .and_then(|s| s.rows().into_iter().find(|r| r.h == h))
-        };
-        let _ = writeln!(md, "## {} ({})\n", s.label, s.spec.display());
-        let _ = writeln!(
-            md,
-            "| h_interface (mm) | DOFs | steps | completed | geometry (s) | mesh (s) | solve (s) | assembly / constitutive / factorisation / solve (s) | peak σ_mb (MPa) | error | GCI | energy (J/m²) | error | GCI | energy imbalance |"
-        );
-        let _ = writeln!(
-            md,
-            "|---:|---:|---:|---|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|"
-        );
-        for (h, r) in &records {
-            let (pr, er) = (row_of(&peak, *h), row_of(&energy, *h));
-            let _ = writeln!(
-                md,
-                "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
-                h * 1e3,
-                r.dofs.map_or("–".into(), |d| d.to_string()),
-                r.steps.map_or("–".into(), |d| d.to_string()),
-                if r.completed { "yes" } else { "no" },
-                fmt_opt(r.t_geometry, 1.0, 2),
-                fmt_opt(r.t_mesh, 1.0, 2),
-                fmt_opt(r.t_solve, 1.0, 1),
-                r.solve_phases.map_or("–".into(), |p| format!(
-                    "{:.1} / {:.1} / {:.1} / {:.1}",
-                    p[0], p[1], p[2], p[3]
-                )),
-                fmt_opt(r.peak, 1e-6, 4),
-                fmt_rel(pr.as_ref().and_then(|x| x.rel_error_vs_extrapolated)),
-                fmt_rel(pr.as_ref().and_then(|x| x.gci)),
-                fmt_opt(r.energy, 1.0, 1),
-                fmt_rel(er.as_ref().and_then(|x| x.rel_error_vs_extrapolated)),
-                fmt_rel(er.as_ref().and_then(|x| x.gci)),
-                fmt_rel(r.energy_imbalance),
-            );
-        }
-        let studies: Vec<post::ConvergenceStudy> = [peak, energy].into_iter().flatten().collect();
-        if studies.is_empty() {
-            let _ = writeln!(
-                md,
-                "\nNo quantity has three grids with a value: no extrapolation.\n"
-            );
-        } else {
-            let _ = writeln!(
-                md,
-                "\nTriplets (finest first):\n\n{}",
-                post::convergence_order_table(&studies).to_markdown()
-            );
-        }
-        for (h, r) in &records {
-            if let Some(why) = &r.reason {
-                let _ = writeln!(
-                    md,
-                    "- h = {} mm did not complete: {}\n",
-                    h * 1e3,
-                    truncate(why, 400)
-                );
-            }
-        }
+        let records = run_series(&s, args, &work, printer);
+        any |= records.iter().any(|(_, r)| !r.curve.is_empty());
+        let studies = write_series(&mut md, &s, &records);
         for st in &studies {
             let mut e = ErrorTimeSeries::from_study(st);
             e.label = format!("{}: {}", s.label, st.quantity);
@@ -406,6 +317,118 @@ pub fn mesh_series(args: &BenchArgs, printer: &Printer) -> Result<ExitCode> {
         bail!("no grid of the mesh series produced a curve");
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// Runs (or reads from the cache) every grid of one series.
+fn run_series(
+    s: &Series,
+    args: &BenchArgs,
+    work: &Path,
+    printer: &Printer,
+) -> Vec<(f64, RunRecord)> {
+    let mut records = Vec::new();
+    for &h in &s.sizes {
+        let mut o = s.extra.clone();
+        o.extend(args.overrides.iter().cloned());
+        o.push(format!("mesh.h_interface=\"{} mm\"", h * 1e3));
+        let name = format!("bench-mesh-{}-{:.0}um", s.label.to_lowercase(), h * 1e6);
+        printer.line(&format!(
+            "mesh series {}: h_interface = {} mm",
+            s.label,
+            h * 1e3
+        ));
+        let rec = run_and_read(&s.spec, &o, &name, work, printer);
+        records.push((h, rec));
+    }
+    records
+}
+
+/// One series' section of the table: a row per grid, the triplets'
+/// extrapolation and GCI, and the grids that did not complete; returns the
+/// convergence studies (peak σ_mb, energy) that had three grids.
+fn write_series(
+    md: &mut String,
+    s: &Series,
+    records: &[(f64, RunRecord)],
+) -> Vec<post::ConvergenceStudy> {
+    let grid = |q: fn(&RunRecord) -> Option<f64>| -> Vec<GridResult> {
+        records
+            .iter()
+            .filter_map(|(h, r)| {
+                Some(GridResult {
+                    h: *h,
+                    value: q(r)?,
+                    dofs: r.dofs,
+                    wall_time: r.total_time(),
+                })
+            })
+            .collect()
+    };
+    let peak = post::convergence_study("peak σ_mb", &grid(|r| r.peak)).ok();
+    let energy = post::convergence_study("energy", &grid(|r| r.energy)).ok();
+    let row_of = |study: &Option<post::ConvergenceStudy>, h: f64| {
+        study
+            .as_ref()
+            .and_then(|s| s.rows().into_iter().find(|r| r.h == h))
+    };
+    let _ = writeln!(md, "## {} ({})\n", s.label, s.spec.display());
+    let _ = writeln!(
+        md,
+        "| h_interface (mm) | DOFs | steps | completed | geometry (s) | mesh (s) | solve (s) | assembly / constitutive / factorisation / solve (s) | peak σ_mb (MPa) | error | GCI | energy (J/m²) | error | GCI | energy imbalance |"
+    );
+    let _ = writeln!(
+        md,
+        "|---:|---:|---:|---|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|"
+    );
+    for (h, r) in records {
+        let (pr, er) = (row_of(&peak, *h), row_of(&energy, *h));
+        let _ = writeln!(
+            md,
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
+            h * 1e3,
+            r.dofs.map_or("–".into(), |d| d.to_string()),
+            r.steps.map_or("–".into(), |d| d.to_string()),
+            if r.completed { "yes" } else { "no" },
+            fmt_opt(r.t_geometry, 1.0, 2),
+            fmt_opt(r.t_mesh, 1.0, 2),
+            fmt_opt(r.t_solve, 1.0, 1),
+            r.solve_phases.map_or("–".into(), |p| format!(
+                "{:.1} / {:.1} / {:.1} / {:.1}",
+                p[0], p[1], p[2], p[3]
+            )),
+            fmt_opt(r.peak, 1e-6, 4),
+            fmt_rel(pr.as_ref().and_then(|x| x.rel_error_vs_extrapolated)),
+            fmt_rel(pr.as_ref().and_then(|x| x.gci)),
+            fmt_opt(r.energy, 1.0, 1),
+            fmt_rel(er.as_ref().and_then(|x| x.rel_error_vs_extrapolated)),
+            fmt_rel(er.as_ref().and_then(|x| x.gci)),
+            fmt_rel(r.energy_imbalance),
+        );
+    }
+    let studies: Vec<post::ConvergenceStudy> = [peak, energy].into_iter().flatten().collect();
+    if studies.is_empty() {
+        let _ = writeln!(
+            md,
+            "\nNo quantity has three grids with a value: no extrapolation.\n"
+        );
+    } else {
+        let _ = writeln!(
+            md,
+            "\nTriplets (finest first):\n\n{}",
+            post::convergence_order_table(&studies).to_markdown()
+        );
+    }
+    for (h, r) in records {
+        if let Some(why) = &r.reason {
+            let _ = writeln!(
+                md,
+                "- h = {} mm did not complete: {}\n",
+                h * 1e3,
+                truncate(why, 400)
+            );
+        }
+    }
+    studies
 }
 
 fn truncate(s: &str, n: usize) -> String {
@@ -635,21 +658,10 @@ fn curve_all_finite(text: &str) -> bool {
         })
 }
 
-/// Checks every case of a study run by `ribbar study` in `work` and writes
-/// the results table `out` (Markdown): case, parameters, completed, steps,
-/// peak σ_mb, energy imbalance and check, NaN, panic, reason if stopped.
-/// Damage monotonicity is not re-checked here: every law keeps D as the
-/// maximum of its committed and trial values (laws' tests).
-pub fn stress_report(
-    study_file: &Path,
-    work: &Path,
-    out: &Path,
-    command: &str,
-) -> Result<Vec<StressCase>> {
-    let study = Study::load(study_file)?;
-    let logs = work.join(&study.name).join("logs");
-    let mut cases = Vec::new();
-    for case in &study.cases {
+impl StressCase {
+    /// One case's record, its logs (`logs/<case>.mesh.log`, `.run.log`) and
+    /// curve read back from a study's work dir.
+    fn read(case: &crate::study::Case, work: &Path, logs: &Path) -> StressCase {
         let dir = work.join(&case.name);
         let record = RunRecord::read(&case.name, &dir);
         let log_text: String = ["mesh", "run"]
@@ -684,14 +696,33 @@ pub fn stress_report(
             })
             .collect::<Vec<_>>()
             .join(", ");
-        cases.push(StressCase {
+        StressCase {
             name: case.name.clone(),
             parameters,
             record,
             panicked,
             non_finite,
             failure,
-        });
+        }
+    }
+}
+
+/// Checks every case of a study run by `ribbar study` in `work` and writes
+/// the results table `out` (Markdown): case, parameters, completed, steps,
+/// peak σ_mb, energy imbalance and check, NaN, panic, reason if stopped.
+/// Damage monotonicity is not re-checked here: every law keeps D as the
+/// maximum of its committed and trial values (laws' tests).
+pub fn stress_report(
+    study_file: &Path,
+    work: &Path,
+    out: &Path,
+    command: &str,
+) -> Result<Vec<StressCase>> {
+    let study = Study::load(study_file)?;
+    let logs = work.join(&study.name).join("logs");
+    let mut cases = Vec::new();
+    for case in &study.cases {
+        cases.push(StressCase::read(case, work, &logs));
     }
     let n = cases.len();
     let completed = cases.iter().filter(|c| c.record.completed).count();
