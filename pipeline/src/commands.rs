@@ -77,7 +77,7 @@ pub fn clean(args: &CleanArgs, printer: &Printer) -> Result<ExitCode> {
 
 /// The material-point driver.
 pub fn material(args: &MaterialArgs) -> Result<ExitCode> {
-    let table = solve::material_point::run_file(&args.test)?;
+    let table = solve::problems::material_point::run_file(&args.test)?;
     match &args.output {
         Some(path) => {
             let mut bytes = Vec::new();

@@ -10,7 +10,7 @@ use mesh::{Model, Region};
 use solve::assembly::{ElementLaws, Outputs, SharedBulkLaw, States, System, Tangents};
 use solve::laws::elastic::LinearElastic;
 use solve::laws::TangentKind;
-use solve::linear::{pcg, Cholesky, Ordering, SymLower};
+use solve::linalg::{pcg, Cholesky, Ordering, SymLower};
 use std::sync::Arc;
 use std::time::Instant;
 

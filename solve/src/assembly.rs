@@ -10,8 +10,8 @@
 //! correction is zero there. The system is symmetric whenever the laws'
 //! tangents are.
 
-use crate::element::{ElementError, TetGeometry};
-use crate::interface_element::{InterfaceKernel, INTERFACE_POINTS};
+use crate::elements::interface::{InterfaceKernel, INTERFACE_POINTS};
+use crate::elements::tet::{ElementError, TetGeometry};
 use crate::laws::{BulkLaw, BulkState, InterfaceLaw, InterfaceState, LawError, TangentKind};
 use mesh::Model;
 use rayon::prelude::*;

@@ -40,8 +40,8 @@
 //! the smallest dissipation increment so that such a path shows.
 
 use crate::assembly::{ElementLaws, States};
-use crate::element::{ElementError, TetGeometry};
-use crate::interface_element::{InterfaceKernel, INTERFACE_POINTS};
+use crate::elements::interface::{InterfaceKernel, INTERFACE_POINTS};
+use crate::elements::tet::{ElementError, TetGeometry};
 use crate::laws::{BulkLaw, BulkState, LawError, TangentKind};
 use mesh::Model;
 use nalgebra::{Vector3, Vector6};

@@ -11,8 +11,8 @@
 //! strain (the laws are pure functions of both), so nothing extra is stored.
 
 use crate::assembly::{ElementLaws, States};
-use crate::element::TetGeometry;
-use crate::interface_element::{InterfaceKernel, INTERFACE_POINTS};
+use crate::elements::interface::{InterfaceKernel, INTERFACE_POINTS};
+use crate::elements::tet::TetGeometry;
 use crate::laws::TangentKind;
 use mesh::{Model, Region};
 use nalgebra::Matrix3;

@@ -1,16 +1,19 @@
 //! Material laws, element kernels, assembly and the nonlinear pull-out solver.
+//!
+//! Where things are: a law in `laws/` (one file each, dispatched by
+//! `laws::AnyBulkLaw` / `AnyInterfaceLaw`); an element kernel in
+//! `elements/`; sparse linear algebra in `linalg/`; the Newton solver and
+//! path-following in `nonlinear/`; the problems built on them (pull-out,
+//! linear perfect bond, material point) in `problems/`; spec sections in
+//! `spec/`; what a run writes in `curve`, `fields` and `energy`.
 
-pub mod amg;
 pub mod assembly;
 pub mod curve;
-pub mod element;
+pub mod elements;
 pub mod energy;
 pub mod fields;
-pub mod interface_element;
 pub mod laws;
-pub mod linear;
-pub mod linear_elastic;
-pub mod material_point;
+pub mod linalg;
 pub mod nonlinear;
 pub mod problems;
 pub mod spec;

@@ -2,9 +2,9 @@
 //! solvers on a small structured specimen built without gmsh.
 
 use mesh::{Frame, InterfaceElement, InterfaceZone, Model, NodeSets, Region};
-use solve::amg::AmgParams;
 use solve::laws::elastic::LinearElastic;
-use solve::linear_elastic::{solve, ElasticSolution, ElasticSolver, PerfectBond};
+use solve::linalg::amg::AmgParams;
+use solve::problems::linear_elastic::{solve, ElasticSolution, ElasticSolver, PerfectBond};
 
 const CONCRETE: LinearElastic = LinearElastic {
     young_modulus: 25e9,

@@ -2,7 +2,9 @@
 //! test files in `specs/material/` (the `material` subcommand's input).
 
 use solve::laws::j2::von_mises;
-use solve::material_point::{run, run_file, MaterialPointError, MaterialTest, PointTable};
+use solve::problems::material_point::{
+    run, run_file, MaterialPointError, MaterialTest, PointTable,
+};
 use std::path::PathBuf;
 
 fn case_path(name: &str) -> PathBuf {

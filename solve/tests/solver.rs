@@ -12,7 +12,7 @@ use solve::laws::fczm::{Fczm, DEFAULT_GAMMA};
 use solve::laws::j2::J2;
 use solve::laws::tvergaard::Tvergaard;
 use solve::laws::{InterfaceLaw, InterfaceState, TangentKind};
-use solve::linear::Ordering;
+use solve::linalg::Ordering;
 use solve::nonlinear::{
     run, CommittedView, Dirichlet, Ending, Measurement, Observer, Problem, Silent, SolveError,
     StepFailure, StepReport,
@@ -78,7 +78,7 @@ fn add_block(m: &mut Model, xs: &[f64], ys: &[f64], zs: &[f64], region: Region) 
                     m.tets.push(t);
                     m.tet_region.push(region);
                     m.tet_size
-                        .push(solve::element::characteristic_size(det.abs() / 6.0));
+                        .push(solve::elements::tet::characteristic_size(det.abs() / 6.0));
                 }
             }
         }
@@ -1063,7 +1063,7 @@ fn quarter_model_equals_full_model() {
 /// Newton corrections with the unsymmetric consistent tangent).
 #[test]
 fn gmres_matches_direct_solve() {
-    use solve::linear::{gmres, Cholesky, SplitMatrix};
+    use solve::linalg::{gmres, Cholesky, SplitMatrix};
     let n = 30;
     let (mut cp, mut ri, mut lo, mut up) = (vec![0], vec![], vec![], vec![]);
     for j in 0..n {

@@ -15,8 +15,8 @@ use super::kinds::{Stage, CHECKPOINT_FILE};
 use anyhow::Result;
 use mesh::{InterfaceZone, Model};
 use solve::assembly::ElementLaws;
+use solve::elements::interface::{InterfaceKernel, INTERFACE_POINTS};
 use solve::energy::{EnergyRow, EnergyStart, EnergyTracker, ENERGY_TOLERANCE};
-use solve::interface_element::{InterfaceKernel, INTERFACE_POINTS};
 use solve::laws::{InterfaceLaw, TangentKind};
 use solve::nonlinear::{
     Checkpoint, CommittedView, Cutback, Observer, RunResult, SolveError, StepReport,

@@ -5,7 +5,7 @@ use super::control::ControlMode;
 use super::summary::Summary;
 use crate::assembly::States;
 use crate::curve::CurveRow;
-use crate::interface_element::INTERFACE_POINTS;
+use crate::elements::interface::INTERFACE_POINTS;
 use mesh::Model;
 use serde::{Deserialize, Serialize};
 use std::path::Path;

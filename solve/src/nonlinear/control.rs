@@ -29,7 +29,7 @@
 use super::problem::Dirichlet;
 use crate::assembly::DofMap;
 use crate::assembly::LoadDerivatives;
-use crate::linear::{dot, LinearError, Operator, Preconditioner};
+use crate::linalg::{dot, LinearError, Operator, Preconditioner};
 use serde::{Deserialize, Serialize};
 
 /// A linear quantity Σ w_i u_i of the global displacement.

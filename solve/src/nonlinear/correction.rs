@@ -15,7 +15,7 @@ use super::control::{Border, BorderedPreconditioner};
 use super::workspace::Workspace;
 use crate::assembly::{Outputs, States, Tangents};
 use crate::laws::TangentKind;
-use crate::linear::{gmres, pcg, LinearError, SplitMatrix, SymLower};
+use crate::linalg::{gmres, pcg, LinearError, SplitMatrix, SymLower};
 use crate::spec::solver::LinearSolverKind;
 use std::time::Instant;
 
@@ -101,7 +101,7 @@ impl Workspace<'_> {
         let out = match border {
             None => self.lin.chol.solve_in_place(du),
             Some(b) => BorderedPreconditioner::new(&self.lin.chol, b).and_then(|p| {
-                use crate::linear::Preconditioner;
+                use crate::linalg::Preconditioner;
                 p.apply(du)
             }),
         };

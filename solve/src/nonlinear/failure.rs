@@ -2,7 +2,7 @@
 //! early (the converged part is kept).
 
 use crate::assembly::{AssemblyError, States};
-use crate::linear::LinearError;
+use crate::linalg::LinearError;
 
 /// How many integration points changed regime between the committed state
 /// and the last iterate of a failed attempt: the hint of a likely cause.

@@ -16,7 +16,7 @@ use super::failure::{RegimeChanges, StepFailure};
 use super::workspace::Workspace;
 use crate::assembly::{LoadDerivatives, States, Tangents};
 use crate::laws::TangentKind;
-use crate::linear::{dot, norm};
+use crate::linalg::{dot, norm};
 use crate::spec::solver::{Forcing, SolverSettings};
 
 /// Shortest line-search step kept; below it the full Newton step is taken.
@@ -455,7 +455,7 @@ impl Workspace<'_> {
         (r, rhs): (&[f64], &mut [f64]),
         du: &mut [f64],
         eta: f64,
-    ) -> Result<(), crate::linear::LinearError> {
+    ) -> Result<(), crate::linalg::LinearError> {
         let load = self.load.take().unwrap_or_default();
         let n = r.len();
         let mut row = std::mem::take(&mut self.constraint_row);

@@ -7,7 +7,7 @@ use super::failure::StepFailure;
 pub use super::summary::{Ending, Summary, WallTimes};
 use crate::assembly::{AssemblyError, ElementLaws, States};
 pub use crate::curve::CurveRow;
-use crate::linear::LinearError;
+use crate::linalg::LinearError;
 use mesh::Model;
 
 /// A finished (or partial) run.

@@ -19,7 +19,7 @@ use crate::assembly::{
     AssemblyError, ElementLaws, LoadDerivatives, Outputs, States, System, Tangents,
 };
 use crate::laws::TangentKind;
-use crate::linear::norm;
+use crate::linalg::norm;
 use crate::spec::solver::{
     ConcreteIntegration, LinearSolverKind, Loading, PathFollowing, Predictor, SolverSettings,
 };

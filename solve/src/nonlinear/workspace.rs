@@ -6,7 +6,7 @@ use super::summary::WallTimes;
 use crate::assembly::{
     AssemblyError, DofMap, ElementLaws, LoadDerivatives, Outputs, States, System, Tangents,
 };
-use crate::linear::{Cholesky, LinearError};
+use crate::linalg::{Cholesky, LinearError};
 use crate::spec::solver::{LinearSolverKind, Precision, SolverSettings};
 use std::time::Instant;
 

@@ -11,7 +11,7 @@
 //! ```
 
 use crate::laws::TangentKind;
-use crate::linear::Ordering;
+use crate::linalg::Ordering;
 use geom::units::{Dim, RawQuantity, UnitError};
 use serde::{Deserialize, Serialize};
 

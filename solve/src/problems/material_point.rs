@@ -22,14 +22,14 @@
 //! consistent tangent restricted to them.
 //!
 //! ```
-//! let test: solve::material_point::MaterialTest = serde_yaml::from_str(r#"
+//! let test: solve::problems::material_point::MaterialTest = serde_yaml::from_str(r#"
 //! law: j2
 //! parameters: {E: "200 GPa", nu: 0.3, sigma_y: "365 MPa"}
 //! increments: 10
 //! path: [{t: 0}, {t: 1, exx: 0.004}]
 //! stress: {syy: 0, szz: 0}
 //! "#).unwrap();
-//! let table = solve::material_point::run(&test).unwrap();
+//! let table = solve::problems::material_point::run(&test).unwrap();
 //! let sxx = table.column("sxx").unwrap();
 //! assert!((sxx.last().unwrap() - 365e6).abs() < 1.0);
 //! ```

@@ -10,6 +10,8 @@
 //!   older Cholesky factor, so one factorisation serves many iterations and
 //!   steps while the tangent drifts slowly (damage, friction).
 
+pub mod amg;
+
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::perm::PermRef;
 use faer::sparse::linalg::cholesky::{

@@ -21,7 +21,7 @@
 //! and column zero, diagonal 1) and their near-null-space rows zeroed, so
 //! the prolongator never interpolates into them.
 
-use crate::linear::{Cholesky, LinearError, Ordering};
+use crate::linalg::{Cholesky, LinearError, Ordering};
 use rayon::prelude::*;
 
 /// Block sparse rows: `rows` block rows of `br`×`bc` blocks (row-major

@@ -6,13 +6,13 @@
 //! force on the bar's loaded end for an imposed displacement.
 //!
 //! Two linear solvers: faer's sparse Cholesky with METIS ordering
-//! ([`crate::linear::Cholesky`]) and conjugate gradients preconditioned by
-//! smoothed-aggregation multigrid ([`crate::amg`]).
+//! ([`crate::linalg::Cholesky`]) and conjugate gradients preconditioned by
+//! smoothed-aggregation multigrid ([`crate::linalg::amg`]).
 
-use crate::amg::{amg_pcg, Amg, AmgError, AmgParams, Bsr};
-use crate::element::{ElementError, TetGeometry};
+use crate::elements::tet::{ElementError, TetGeometry};
 use crate::laws::elastic::LinearElastic;
-use crate::linear::{Cholesky, LinearError, Ordering};
+use crate::linalg::amg::{amg_pcg, Amg, AmgError, AmgParams, Bsr};
+use crate::linalg::{Cholesky, LinearError, Ordering};
 use crate::problems::pullout::pullout_conditions;
 use mesh::{Model, Region, Symmetry};
 use rayon::prelude::*;
