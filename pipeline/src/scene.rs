@@ -63,8 +63,29 @@ pub enum SceneError {
         #[source]
         source: crate::overrides::OverrideError,
     },
-    #[error("{path}: {message}")]
-    Invalid { path: PathBuf, message: String },
+    #[error("{path}: {source}")]
+    Invalid {
+        path: PathBuf,
+        #[source]
+        source: SectionError,
+    },
+}
+
+/// A section of a scene that does not resolve, with its owner's typed error.
+#[derive(Debug, thiserror::Error)]
+pub enum SectionError {
+    #[error("{0}")]
+    Name(String),
+    #[error(transparent)]
+    Geometry(#[from] geom::spec::SpecError),
+    #[error(transparent)]
+    Mesh(#[from] mesh::MeshError),
+    #[error(transparent)]
+    Materials(#[from] solve::spec::materials::MaterialsSpecError),
+    #[error(transparent)]
+    Solver(#[from] solve::spec::solver::SolverSpecError),
+    #[error(transparent)]
+    Outputs(#[from] crate::outputs::OutputsError),
 }
 
 /// Scene names become directory names: keep them portable.
@@ -110,9 +131,9 @@ impl Scene {
         }
         let written = serde_json::to_value(&tree).unwrap_or(serde_json::Value::Null);
         let raw: RawScene = serde_yaml::from_value(tree).map_err(yaml_err)?;
-        let mut scene = raw.resolve().map_err(|message| SceneError::Invalid {
+        let mut scene = raw.resolve().map_err(|source| SceneError::Invalid {
             path: path.to_path_buf(),
-            message,
+            source,
         })?;
         scene.written = written;
         Ok(scene)
@@ -120,19 +141,18 @@ impl Scene {
 }
 
 impl RawScene {
-    pub fn resolve(&self) -> Result<Scene, String> {
-        check_name(&self.name)?;
-        let (bar, specimen) =
-            geom::spec::resolve(&self.bar, &self.specimen).map_err(|e| e.to_string())?;
+    pub fn resolve(&self) -> Result<Scene, SectionError> {
+        check_name(&self.name).map_err(SectionError::Name)?;
+        let (bar, specimen) = geom::spec::resolve(&self.bar, &self.specimen)?;
         Ok(Scene {
             name: self.name.clone(),
             bar,
             specimen,
-            mesh: self.mesh.resolve().map_err(|e| e.to_string())?,
-            materials: self.materials.resolve().map_err(|e| e.to_string())?,
-            loading: self.loading.resolve().map_err(|e| e.to_string())?,
-            solver: self.solver.resolve().map_err(|e| e.to_string())?,
-            outputs: self.outputs.resolve().map_err(|e| e.to_string())?,
+            mesh: self.mesh.resolve()?,
+            materials: self.materials.resolve()?,
+            loading: self.loading.resolve()?,
+            solver: self.solver.resolve()?,
+            outputs: self.outputs.resolve()?,
             written: serde_json::Value::Null,
         })
     }

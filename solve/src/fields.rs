@@ -16,6 +16,7 @@ use crate::elements::tet::TetGeometry;
 use crate::laws::TangentKind;
 use mesh::{Model, Region};
 use nalgebra::Matrix3;
+use serde::{Deserialize, Serialize};
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -223,4 +224,128 @@ pub fn write_interface_vtu(
     );
     out.push_str("</CellData>\n</Piece>\n</UnstructuredGrid>\n</VTKFile>\n");
     write_atomic(path, &out)
+}
+
+/// Mean interface tractions in axial bins along the adhesive zone, for the
+/// paper's Fig. 12 style profile: (z, t_n, t_t) per bin with elements.
+fn interface_profile(
+    model: &Model,
+    laws: &ElementLaws,
+    u: &[f64],
+    states: &States,
+) -> Vec<(f64, f64, f64)> {
+    let bins = 80usize;
+    let (z0, z1) = (0.0, model.adhesive_length);
+    let mut acc = vec![(0.0f64, 0.0f64, 0.0f64); bins];
+    for (i, e) in model.interfaces.iter().enumerate() {
+        if e.zone != mesh::InterfaceZone::Adhesive || laws.interfaces[i].is_none() {
+            continue;
+        }
+        let z = e.nodes[..3]
+            .iter()
+            .map(|&n| model.nodes[n as usize][2])
+            .sum::<f64>()
+            / 3.0;
+        let b = (((z - z0) / (z1 - z0)) * bins as f64)
+            .floor()
+            .clamp(0.0, bins as f64 - 1.0) as usize;
+        let law = laws.interfaces[i].as_ref().expect("checked above");
+        if let Some(t) = mean_traction(
+            e,
+            law.as_ref(),
+            u,
+            &states.interface[INTERFACE_POINTS * i..],
+        ) {
+            acc[b].0 += e.area;
+            acc[b].1 += e.area * t[0];
+            acc[b].2 += e.area * t[1];
+        }
+    }
+    acc.iter()
+        .enumerate()
+        .filter(|(_, a)| a.0 > 0.0)
+        .map(|(b, a)| {
+            (
+                z0 + (b as f64 + 0.5) * (z1 - z0) / bins as f64,
+                a.1 / a.0,
+                a.2 / a.0,
+            )
+        })
+        .collect()
+}
+
+/// Local traction (t_n, t_t, t_h) of one interface element, averaged over
+/// its integration points, at the committed state.
+fn mean_traction(
+    e: &mesh::InterfaceElement,
+    law: &dyn crate::laws::InterfaceLaw,
+    u: &[f64],
+    states: &[crate::laws::InterfaceState],
+) -> Option<[f64; 3]> {
+    let points = InterfaceKernel::new(e)
+        .tractions(law, u, &states[..INTERFACE_POINTS], TangentKind::Secant)
+        .ok()?;
+    let mut t = [0.0; 3];
+    for r in &points {
+        for (tc, rc) in t.iter_mut().zip(r.law.traction.iter()) {
+            *tc += rc / INTERFACE_POINTS as f64;
+        }
+    }
+    Some(t)
+}
+
+/// One bin of an interface traction profile (`interface_profile.csv`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct ProfileRow {
+    /// Converged step the profile was taken at.
+    pub step: usize,
+    /// Free-end displacement at that step, m.
+    pub fed: f64,
+    /// Axial position of the bin's centre, m.
+    pub z: f64,
+    /// Area-weighted mean normal and shear traction t_n, t_t in the bin, Pa.
+    pub normal: f64,
+    pub shear: f64,
+}
+
+/// Columns of `interface_profile.csv`.
+pub const PROFILE_COLUMNS: [&str; 5] = ["step", "fed", "z", "normal", "shear"];
+
+/// The profile of the converged state (`u`, `states`) at a curve step.
+pub fn profile_rows(
+    model: &Model,
+    laws: &ElementLaws,
+    u: &[f64],
+    states: &States,
+    step: usize,
+    fed: f64,
+) -> Vec<ProfileRow> {
+    interface_profile(model, laws, u, states)
+        .into_iter()
+        .map(|(z, normal, shear)| ProfileRow {
+            step,
+            fed,
+            z,
+            normal,
+            shear,
+        })
+        .collect()
+}
+
+/// The text of `interface_profile.csv` for `rows`, ordered by step
+/// (stable), repeated rows once.
+pub fn write_profile_csv(rows: &[ProfileRow]) -> String {
+    let mut rows = rows.to_vec();
+    rows.sort_by_key(|r| r.step);
+    rows.dedup();
+    let mut out = PROFILE_COLUMNS.join(",");
+    out.push('\n');
+    for r in &rows {
+        let _ = writeln!(
+            out,
+            "{},{:e},{:e},{:e},{:e}",
+            r.step, r.fed, r.z, r.normal, r.shear
+        );
+    }
+    out
 }

@@ -6,22 +6,21 @@
 //! The energy balance of every converged step (`solve::energy`) is tracked
 //! alongside: `curve.csv` carries the energy columns (J, whole specimen;
 //! `solve::curve::ENERGY_COLUMNS`) after the curve's, and `solve.json` an
-//! `energy_check` object. Its record is saved next to each checkpoint
-//! (before it), so a resumed run continues the sums and writes the same
-//! values as an uninterrupted one.
+//! `energy_check` object. Everything a resumed run needs (the solver's
+//! state, the energy rows, the interface profiles so far) is in the one
+//! checkpoint file (`Checkpoint::record`), so a resumed run continues the
+//! sums and writes the same values as an uninterrupted one.
 
 use super::ctx::Ctx;
 use super::kinds::{Stage, CHECKPOINT_FILE};
 use anyhow::Result;
-use mesh::{InterfaceZone, Model};
+use mesh::Model;
 use solve::assembly::ElementLaws;
-use solve::elements::interface::{InterfaceKernel, INTERFACE_POINTS};
 use solve::energy::{EnergyRow, EnergyStart, EnergyTracker, ENERGY_TOLERANCE};
-use solve::laws::{InterfaceLaw, TangentKind};
+use solve::fields::ProfileRow;
 use solve::nonlinear::{
-    Checkpoint, CommittedView, Cutback, Observer, RunResult, SolveError, StepReport,
+    Checkpoint, CommittedView, Cutback, Observer, ObserverRecord, RunResult, SolveError, StepReport,
 };
-use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
@@ -31,122 +30,15 @@ use std::time::{Duration, Instant};
 /// resumed run repeats little work (every step on small models).
 const CHECKPOINT_COST_RATIO: u32 = 20;
 
-/// Columns of `interface_profile.csv`: step, FED (m), z (m), mean normal
-/// and shear traction (Pa) of the adhesive interface in an axial bin.
-const PROFILE_HEADER: &str = "step,fed,z,normal,shear";
-
-/// The energy rows up to the last checkpoint (JSON list of [`EnergyRow`]),
-/// in the in-progress directory; removed when the stage completes.
-const ENERGY_RECORD_FILE: &str = "energy_record.json";
-
-/// Mean interface tractions in axial bins along the adhesive zone, for the
-/// paper's Fig. 12 style profile: (z, t_n, t_t) per bin with elements.
-fn interface_profile(
-    model: &Model,
-    laws: &ElementLaws,
-    view: &CommittedView<'_>,
-) -> Vec<(f64, f64, f64)> {
-    let bins = 80usize;
-    let (z0, z1) = (0.0, model.adhesive_length);
-    let mut acc = vec![(0.0f64, 0.0f64, 0.0f64); bins];
-    for (i, e) in model.interfaces.iter().enumerate() {
-        if e.zone != InterfaceZone::Adhesive || laws.interfaces[i].is_none() {
-            continue;
-        }
-        let z = e.nodes[..3]
-            .iter()
-            .map(|&n| model.nodes[n as usize][2])
-            .sum::<f64>()
-            / 3.0;
-        let b = (((z - z0) / (z1 - z0)) * bins as f64)
-            .floor()
-            .clamp(0.0, bins as f64 - 1.0) as usize;
-        let law = laws.interfaces[i].as_ref().expect("checked above");
-        if let Some(t) = mean_traction(
-            e,
-            law.as_ref(),
-            view.u,
-            &view.states.interface[INTERFACE_POINTS * i..],
-        ) {
-            acc[b].0 += e.area;
-            acc[b].1 += e.area * t[0];
-            acc[b].2 += e.area * t[1];
-        }
-    }
-    acc.iter()
-        .enumerate()
-        .filter(|(_, a)| a.0 > 0.0)
-        .map(|(b, a)| {
-            (
-                z0 + (b as f64 + 0.5) * (z1 - z0) / bins as f64,
-                a.1 / a.0,
-                a.2 / a.0,
-            )
-        })
-        .collect()
-}
-
-/// Local traction (t_n, t_t, t_h) of one interface element, averaged over
-/// its integration points, at the committed state.
-fn mean_traction(
-    e: &mesh::InterfaceElement,
-    law: &dyn InterfaceLaw,
-    u: &[f64],
-    states: &[solve::laws::InterfaceState],
-) -> Option<[f64; 3]> {
-    let points = InterfaceKernel::new(e)
-        .tractions(law, u, &states[..INTERFACE_POINTS], TangentKind::Secant)
-        .ok()?;
-    let mut t = [0.0; 3];
-    for r in &points {
-        for (tc, rc) in t.iter_mut().zip(r.law.traction.iter()) {
-            *tc += rc / INTERFACE_POINTS as f64;
-        }
-    }
-    Some(t)
-}
-
-/// Where the profile of the current peak is kept until the run ends.
-fn peak_profile_path(profile: &Path) -> PathBuf {
-    profile.with_file_name("interface_profile_peak.part")
-}
-
-/// Adds the peak's profile to the others, ordered by step.
-fn merge_peak_profile(profile: &Path) -> Result<()> {
-    let peak_path = peak_profile_path(profile);
-    let Ok(peak) = std::fs::read_to_string(&peak_path) else {
-        return Ok(());
-    };
-    let text = std::fs::read_to_string(profile)?;
-    let mut lines = text.lines();
-    let header = lines.next().unwrap_or(PROFILE_HEADER);
-    let step = |l: &&str| {
-        l.split(',')
-            .next()
-            .and_then(|s| s.parse::<usize>().ok())
-            .unwrap_or(0)
-    };
-    let mut rows: Vec<&str> = lines.chain(peak.lines()).collect();
-    rows.sort_by_key(step);
-    rows.dedup();
-    let mut out = format!("{header}\n");
-    for r in rows {
-        out.push_str(r);
-        out.push('\n');
-    }
-    crate::store::write_atomic(profile, out.as_bytes())?;
-    std::fs::remove_file(&peak_path)?;
-    Ok(())
-}
-
 struct StageObserver<'a> {
     ctx: &'a Ctx<'a>,
     laws: &'a ElementLaws,
     checkpoint_path: PathBuf,
     fields_dir: PathBuf,
-    /// `interface_profile.csv` in the in-progress directory, appended at
-    /// each field step so that a resumed run keeps the earlier profiles.
-    profile_path: PathBuf,
+    /// Interface profiles of the field steps, and of the current peak (each
+    /// new maximum replaces it); saved in the checkpoint.
+    profile: Vec<ProfileRow>,
+    peak_profile: Vec<ProfileRow>,
     last_checkpoint: Instant,
     checkpoint_cost: Duration,
     peak: f64,
@@ -158,7 +50,6 @@ struct StageObserver<'a> {
     cutbacks: Vec<String>,
     /// The energy balance; `Err` says why it is not available.
     energy: std::result::Result<EnergyTracker<'a>, String>,
-    energy_path: PathBuf,
 }
 
 impl StageObserver<'_> {
@@ -184,22 +75,18 @@ impl StageObserver<'_> {
             view.u,
             view.states,
         )?;
-        let mut lines = Vec::new();
-        for (z, tn, tt) in interface_profile(model, self.laws, view) {
-            writeln!(
-                lines,
-                "{},{:e},{:e},{:e},{:e}",
-                report.row.step, report.row.fed, z, tn, tt
-            )?;
-        }
+        let rows = solve::fields::profile_rows(
+            model,
+            self.laws,
+            view.u,
+            view.states,
+            report.row.step,
+            report.row.fed,
+        );
         if name == "peak" {
-            // Each new maximum replaces the last: only the peak's profile stays.
-            crate::store::write_atomic(&peak_profile_path(&self.profile_path), &lines)?;
+            self.peak_profile = rows;
         } else {
-            let mut file = std::fs::OpenOptions::new()
-                .append(true)
-                .open(&self.profile_path)?;
-            file.write_all(&lines)?;
+            self.profile.extend(rows);
         }
         Ok(())
     }
@@ -264,19 +151,16 @@ impl Observer for StageObserver<'_> {
             && self.last_checkpoint.elapsed() >= self.checkpoint_cost * CHECKPOINT_COST_RATIO
         {
             let started = Instant::now();
-            // The record first: a checkpoint never has more steps than it.
-            if let Ok(tracker) = &self.energy {
-                result = serde_json::to_vec(tracker.rows())
-                    .map_err(anyhow::Error::from)
-                    .and_then(|bytes| {
-                        crate::store::write_atomic(&self.energy_path, &bytes).map_err(Into::into)
-                    });
-            }
-            result = result.and_then(|_| {
-                (view.checkpoint)()
-                    .save(&self.checkpoint_path)
-                    .map_err(Into::into)
-            });
+            let mut checkpoint = (view.checkpoint)();
+            checkpoint.record = ObserverRecord {
+                energy: self
+                    .energy
+                    .as_ref()
+                    .map_or_else(|_| Vec::new(), |t| t.rows().to_vec()),
+                profile: self.profile.clone(),
+                peak_profile: self.peak_profile.clone(),
+            };
+            result = checkpoint.save(&self.checkpoint_path).map_err(Into::into);
             self.checkpoint_cost = started.elapsed();
             self.last_checkpoint = Instant::now();
         }
@@ -305,21 +189,22 @@ pub fn run(ctx: &Ctx, out: &Path) -> Result<()> {
         .element_laws(&model, ctx.scene.specimen.non_adhesive)?;
     let checkpoint_path = out.join(CHECKPOINT_FILE);
     let checkpoint = load_checkpoint(ctx, &checkpoint_path);
-    let resumed_steps = checkpoint.as_ref().map_or(0, |cp| cp.rows.len());
     let (peak_so_far, peak_passed) = peak_before(checkpoint.as_ref())?;
-    let profile_path = out.join("interface_profile.csv");
-    restart_profile(&profile_path, resumed_steps)?;
-    let energy_path = out.join(ENERGY_RECORD_FILE);
     let energy = match &checkpoint {
         None => EnergyTracker::new(&model, &laws).map_err(|e| e.to_string()),
-        Some(cp) => resume_energy(&model, &laws, cp, &energy_path),
+        Some(cp) => resume_energy(&model, &laws, cp),
     };
+    let record = checkpoint
+        .as_ref()
+        .map(|cp| cp.record.clone())
+        .unwrap_or_default();
     let mut observer = StageObserver {
         ctx,
         laws: &laws,
         checkpoint_path: checkpoint_path.clone(),
         fields_dir: out.join("fields"),
-        profile_path: out.join("interface_profile.csv"),
+        profile: record.profile,
+        peak_profile: record.peak_profile,
         last_checkpoint: Instant::now(),
         checkpoint_cost: Duration::ZERO,
         peak: peak_so_far,
@@ -327,7 +212,6 @@ pub fn run(ctx: &Ctx, out: &Path) -> Result<()> {
         error: None,
         cutbacks: Vec::new(),
         energy,
-        energy_path: energy_path.clone(),
     };
     let outcome = solve::problems::pullout::solve_pullout(
         &model,
@@ -345,7 +229,11 @@ pub fn run(ctx: &Ctx, out: &Path) -> Result<()> {
     if ctx.scene.outputs.fields.at_end {
         write_end_fields(&mut observer, &model, &laws, &result)?;
     }
-    merge_peak_profile(&observer.profile_path)?;
+    let profile = [observer.profile.as_slice(), &observer.peak_profile].concat();
+    crate::store::write_atomic(
+        &out.join("interface_profile.csv"),
+        solve::fields::write_profile_csv(&profile).as_bytes(),
+    )?;
     let energy_rows = observer.energy.as_ref().ok().map(|t| t.rows().to_vec());
     let energy_check = energy_check_json(ctx, &observer.energy, energy_rows.as_deref(), &result)?;
     crate::store::write_atomic(
@@ -366,7 +254,6 @@ pub fn run(ctx: &Ctx, out: &Path) -> Result<()> {
         &serde_json::to_vec_pretty(&solve_json)?,
     )?;
     let _ = std::fs::remove_file(&checkpoint_path);
-    let _ = std::fs::remove_file(&energy_path);
     if let Some(why) = &stopped {
         // The converged part is a result like any other (a rerun with the
         // same inputs would stop at the same step): it is committed, post
@@ -417,25 +304,6 @@ fn peak_before(checkpoint: Option<&Checkpoint>) -> Result<(f64, bool)> {
         }
         None => (f64::NEG_INFINITY, false),
     })
-}
-
-/// Starts the interface profile file anew, keeping the rows of the steps
-/// up to the checkpoint (later steps are recomputed).
-fn restart_profile(profile_path: &Path, resumed_steps: usize) -> Result<()> {
-    let mut profile = format!("{PROFILE_HEADER}\n").into_bytes();
-    if resumed_steps > 0 {
-        if let Ok(old) = std::fs::read_to_string(profile_path) {
-            for line in old.lines().skip(1) {
-                let step: Option<usize> = line.split(',').next().and_then(|s| s.parse().ok());
-                if step.is_some_and(|s| s <= resumed_steps) {
-                    profile.extend_from_slice(line.as_bytes());
-                    profile.push(b'\n');
-                }
-            }
-        }
-    }
-    crate::store::write_atomic(profile_path, &profile)?;
-    Ok(())
 }
 
 /// The converged steps of a run and, when it stopped early, why: a stall
@@ -560,27 +428,21 @@ fn report_ending(ctx: &Ctx, ending: &solve::nonlinear::Ending) {
     }
 }
 
-/// The energy tracker of a resumed run: the saved record of the steps up to
-/// the checkpoint (it may hold more, saved just before a checkpoint that was
-/// not written), continued from the checkpoint's state.
+/// The energy tracker of a resumed run, continued from the checkpoint's
+/// state and its record of the steps before it.
 fn resume_energy<'a>(
     model: &'a Model,
     laws: &'a ElementLaws,
     cp: &Checkpoint,
-    path: &Path,
 ) -> std::result::Result<EnergyTracker<'a>, String> {
-    let bytes =
-        std::fs::read(path).map_err(|e| format!("resumed without the energy record ({e})"))?;
-    let mut rows: Vec<EnergyRow> =
-        serde_json::from_slice(&bytes).map_err(|e| format!("unreadable energy record: {e}"))?;
-    if rows.len() < cp.rows.len() {
+    let rows = cp.record.energy.clone();
+    if rows.len() != cp.rows.len() {
         return Err(format!(
-            "the energy record holds {} steps, the checkpoint {}",
+            "the checkpoint's energy record holds {} steps, its curve {}",
             rows.len(),
             cp.rows.len()
         ));
     }
-    rows.truncate(cp.rows.len());
     let force = cp.rows.last().map_or(0.0, |r| r.force);
     let start = EnergyStart {
         u: &cp.u,

@@ -6,6 +6,8 @@ use super::summary::Summary;
 use crate::assembly::States;
 use crate::curve::CurveRow;
 use crate::elements::interface::INTERFACE_POINTS;
+use crate::energy::EnergyRow;
+use crate::fields::ProfileRow;
 use mesh::Model;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
@@ -41,6 +43,21 @@ pub struct Checkpoint {
     /// N, and its increment in that step (dissipation control).
     pub generalised_load: f64,
     pub last_load_increment: f64,
+    /// What the run's caller recorded up to this step; it travels with the
+    /// state so that a resumed run continues it (the solver leaves it
+    /// empty, the caller fills it before saving).
+    pub record: ObserverRecord,
+}
+
+/// What an [`Observer`](super::Observer) recorded of a run up to a checkpoint.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+pub struct ObserverRecord {
+    /// Energy balance, one row per converged step.
+    pub energy: Vec<EnergyRow>,
+    /// Interface traction profiles of the field steps so far.
+    pub profile: Vec<ProfileRow>,
+    /// The profile of the current adhesion peak (replaced by each new one).
+    pub peak_profile: Vec<ProfileRow>,
 }
 
 /// The kept preconditioner of a run: the lower-triangle values (N/m) that
@@ -65,7 +82,7 @@ pub enum CheckpointError {
     Corrupt { path: String, detail: String },
 }
 
-const CHECKPOINT_MAGIC: u64 = 0x7269_6262_6172_0006;
+const CHECKPOINT_MAGIC: u64 = 0x7269_6262_6172_0007;
 
 impl Checkpoint {
     /// Writes atomically (temporary file then rename), bincode.

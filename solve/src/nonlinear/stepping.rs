@@ -899,6 +899,7 @@ impl<'a> Driver<'a> {
             last_step: path.last_lambda_increment,
             generalised_load: path.load,
             last_load_increment: path.last_load_increment,
+            record: Default::default(),
         }
     }
 
