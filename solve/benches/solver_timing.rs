@@ -7,11 +7,10 @@
 //! sets n (default 30, ≈ 89 k DOFs).
 
 use mesh::{Model, Region};
-use solve::assembly::{ElementLaws, Outputs, SharedBulkLaw, States, System, Tangents};
+use solve::assembly::{ElementLaws, Outputs, States, System, Tangents};
 use solve::laws::elastic::LinearElastic;
 use solve::laws::TangentKind;
 use solve::linalg::{pcg, Cholesky, Ordering, SymLower};
-use std::sync::Arc;
 use std::time::Instant;
 
 fn cube(n: usize) -> Model {
@@ -74,7 +73,7 @@ fn main() {
     let fixed: Vec<usize> = (0..(n + 1) * (n + 1))
         .flat_map(|v| [3 * v, 3 * v + 1, 3 * v + 2])
         .collect();
-    let law: SharedBulkLaw = Arc::new(LinearElastic {
+    let law: solve::laws::AnyBulkLaw = solve::laws::AnyBulkLaw::Elastic(LinearElastic {
         young_modulus: 30e9,
         poisson_ratio: 0.2,
     });

@@ -12,27 +12,23 @@
 
 use crate::elements::interface::{InterfaceKernel, INTERFACE_POINTS};
 use crate::elements::tet::{ElementError, TetGeometry};
-use crate::laws::{BulkLaw, BulkState, InterfaceLaw, InterfaceState, LawError, TangentKind};
+use crate::laws::{
+    AnyBulkLaw, AnyInterfaceLaw, BulkLaw, BulkState, InterfaceState, LawError, TangentKind,
+};
 use mesh::Model;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
-use std::sync::Arc;
 use std::time::Instant;
-
-/// A bulk law shared between elements (one per element where parameters
-/// depend on the element, e.g. Mazars' size l).
-pub type SharedBulkLaw = Arc<dyn BulkLaw + Send + Sync>;
-/// An interface law shared between elements.
-pub type SharedInterfaceLaw = Arc<dyn InterfaceLaw + Send + Sync>;
 
 /// The law of every element of a model.
 #[derive(Clone)]
 pub struct ElementLaws {
-    /// One law per tetrahedron (same order as `Model::tets`).
-    pub tets: Vec<SharedBulkLaw>,
+    /// One law per tetrahedron (same order as `Model::tets`): per element
+    /// where parameters depend on it (Mazars' size l).
+    pub tets: Vec<AnyBulkLaw>,
     /// One law per interface element; `None` leaves the element out
     /// (the free, non-adhesive zone by default: its twins are unconnected).
-    pub interfaces: Vec<Option<SharedInterfaceLaw>>,
+    pub interfaces: Vec<Option<AnyInterfaceLaw>>,
 }
 
 impl ElementLaws {
@@ -40,26 +36,26 @@ impl ElementLaws {
     /// adhesive and (optional) free-zone interface laws.
     pub fn by_region(
         model: &Model,
-        concrete: SharedBulkLaw,
-        steel: SharedBulkLaw,
-        adhesive: SharedInterfaceLaw,
-        free: Option<SharedInterfaceLaw>,
+        concrete: AnyBulkLaw,
+        steel: AnyBulkLaw,
+        adhesive: AnyInterfaceLaw,
+        free: Option<AnyInterfaceLaw>,
     ) -> Self {
         Self {
             tets: model
                 .tet_region
                 .iter()
                 .map(|r| match r {
-                    mesh::Region::Concrete => concrete.clone(),
-                    mesh::Region::Steel => steel.clone(),
+                    mesh::Region::Concrete => concrete,
+                    mesh::Region::Steel => steel,
                 })
                 .collect(),
             interfaces: model
                 .interfaces
                 .iter()
                 .map(|e| match e.zone {
-                    mesh::InterfaceZone::Adhesive => Some(adhesive.clone()),
-                    mesh::InterfaceZone::Free => free.clone(),
+                    mesh::InterfaceZone::Adhesive => Some(adhesive),
+                    mesh::InterfaceZone::Free => free,
                 })
                 .collect(),
         }
@@ -72,12 +68,12 @@ impl ElementLaws {
     /// regularisation: `concrete(l)` is called once per concrete tet.
     pub fn sized<E>(
         model: &Model,
-        concrete: impl Fn(f64) -> Result<SharedBulkLaw, E>,
-        steel: SharedBulkLaw,
-        adhesive: SharedInterfaceLaw,
-        free: Option<SharedInterfaceLaw>,
+        concrete: impl Fn(f64) -> Result<AnyBulkLaw, E>,
+        steel: AnyBulkLaw,
+        adhesive: AnyInterfaceLaw,
+        free: Option<AnyInterfaceLaw>,
     ) -> Result<Self, (usize, E)> {
-        let mut laws = Self::by_region(model, steel.clone(), steel, adhesive, free);
+        let mut laws = Self::by_region(model, steel, steel, adhesive, free);
         for (i, r) in model.tet_region.iter().enumerate() {
             if *r == mesh::Region::Concrete {
                 let l = model.tet_size.get(i).copied().unwrap_or(f64::NAN);
@@ -598,13 +594,13 @@ impl System {
                 let kern = &self.iface_kernels[index];
                 let committed =
                     &committed.interface[INTERFACE_POINTS * index..INTERFACE_POINTS * (index + 1)];
-                let points = kern
-                    .tractions(law.as_ref(), u, committed, iface_kind)
-                    .map_err(|e| AssemblyError::InterfaceLaw {
+                let points = kern.tractions(law, u, committed, iface_kind).map_err(|e| {
+                    AssemblyError::InterfaceLaw {
                         index,
                         point: e.point,
                         source: e.source,
-                    })?;
+                    }
+                })?;
                 let mut f = [0.0; 18];
                 let mut kpair = [[0.0; 36]; INTERFACE_POINTS];
                 let mut st = [InterfaceState::default(); INTERFACE_POINTS];

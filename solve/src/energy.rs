@@ -42,7 +42,7 @@
 use crate::assembly::{ElementLaws, States};
 use crate::elements::interface::{InterfaceKernel, INTERFACE_POINTS};
 use crate::elements::tet::{ElementError, TetGeometry};
-use crate::laws::{BulkLaw, BulkState, LawError, TangentKind};
+use crate::laws::{BulkLaw, BulkState, InterfaceLaw, LawError, TangentKind};
 use mesh::Model;
 use nalgebra::{Vector3, Vector6};
 use rayon::prelude::*;
@@ -231,35 +231,35 @@ impl<'a> EnergyTracker<'a> {
     fn sweep(&mut self, u: &[f64], states: &States) -> Result<(f64, f64), EnergyError> {
         let (model, laws, u_old) = (self.model, self.laws, &self.u_old);
         let tets = &self.tets;
-        let bulk: Vec<Result<(f64, f64), EnergyError>> = self
-            .stress_old
-            .par_chunks_mut(CHUNK)
-            .enumerate()
-            .map(|(c, chunk)| {
-                let (mut work, mut stored) = (0.0, 0.0);
-                for (k, old) in chunk.iter_mut().enumerate() {
-                    let i = c * CHUNK + k;
-                    let nodes = model.tets[i];
-                    let gather = |v: &[f64]| -> [f64; 12] {
-                        std::array::from_fn(|j| v[3 * nodes[j / 3] as usize + j % 3])
-                    };
-                    let (eps, eps_old) =
-                        (tets[i].strain(&gather(u)), tets[i].strain(&gather(u_old)));
-                    let (sigma, psi) = bulk_point(laws.tets[i].as_ref(), &states.bulk[i], &eps)
-                        .map_err(|source| EnergyError::Law {
-                            what: "tet",
-                            index: i,
-                            source,
-                        })?;
-                    let s_old = Vector6::from_column_slice(old);
-                    let v = tets[i].volume;
-                    work += 0.5 * (s_old + sigma).dot(&(eps - eps_old)) * v;
-                    stored += psi * v;
-                    old.copy_from_slice(sigma.as_slice());
-                }
-                Ok((work, stored))
-            })
-            .collect();
+        let bulk: Vec<Result<(f64, f64), EnergyError>> =
+            self.stress_old
+                .par_chunks_mut(CHUNK)
+                .enumerate()
+                .map(|(c, chunk)| {
+                    let (mut work, mut stored) = (0.0, 0.0);
+                    for (k, old) in chunk.iter_mut().enumerate() {
+                        let i = c * CHUNK + k;
+                        let nodes = model.tets[i];
+                        let gather = |v: &[f64]| -> [f64; 12] {
+                            std::array::from_fn(|j| v[3 * nodes[j / 3] as usize + j % 3])
+                        };
+                        let (eps, eps_old) =
+                            (tets[i].strain(&gather(u)), tets[i].strain(&gather(u_old)));
+                        let (sigma, psi) = bulk_point(&laws.tets[i], &states.bulk[i], &eps)
+                            .map_err(|source| EnergyError::Law {
+                                what: "tet",
+                                index: i,
+                                source,
+                            })?;
+                        let s_old = Vector6::from_column_slice(old);
+                        let v = tets[i].volume;
+                        work += 0.5 * (s_old + sigma).dot(&(eps - eps_old)) * v;
+                        stored += psi * v;
+                        old.copy_from_slice(sigma.as_slice());
+                    }
+                    Ok((work, stored))
+                })
+                .collect();
         let kernels = &self.kernels;
         let iface: Vec<Result<(f64, f64), EnergyError>> = self
             .traction_old
@@ -275,7 +275,7 @@ impl<'a> EnergyTracker<'a> {
                     let kern = &kernels[i];
                     let states = &states.interface[INTERFACE_POINTS * i..];
                     let points = kern
-                        .tractions(law.as_ref(), u, states, TangentKind::Secant)
+                        .tractions(law, u, states, TangentKind::Secant)
                         .map_err(|e| EnergyError::Law {
                             what: "interface element",
                             index: i,
@@ -420,12 +420,10 @@ pub fn check(rows: &[EnergyRow], tolerance: f64) -> EnergyCheck {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::assembly::SharedInterfaceLaw;
     use crate::laws::fczm::{Fczm, DEFAULT_GAMMA};
     use crate::laws::j2::J2;
     use crate::laws::{InterfaceLaw, InterfaceState};
     use mesh::{Frame, InterfaceElement, InterfaceZone, Region};
-    use std::sync::Arc;
 
     fn fczm() -> Fczm {
         Fczm {
@@ -600,10 +598,9 @@ mod tests {
         };
         model.symmetry = mesh::Symmetry::Quarter;
         let law = fczm();
-        let shared: SharedInterfaceLaw = Arc::new(law);
         let laws = ElementLaws {
             tets: Vec::new(),
-            interfaces: vec![Some(shared)],
+            interfaces: vec![Some(law.into())],
         };
         let mut tracker = EnergyTracker::new(&model, &laws).unwrap();
         let mut states = States::initial(&model);

@@ -13,7 +13,7 @@
 use crate::assembly::{ElementLaws, States};
 use crate::elements::interface::{InterfaceKernel, INTERFACE_POINTS};
 use crate::elements::tet::TetGeometry;
-use crate::laws::TangentKind;
+use crate::laws::{BulkLaw, TangentKind};
 use mesh::{Model, Region};
 use nalgebra::Matrix3;
 use serde::{Deserialize, Serialize};
@@ -185,7 +185,7 @@ pub fn write_interface_vtu(
         };
         let states = &states.interface[INTERFACE_POINTS * index..INTERFACE_POINTS * (index + 1)];
         let points = InterfaceKernel::new(e)
-            .tractions(law.as_ref(), u, states, TangentKind::Secant)
+            .tractions(law, u, states, TangentKind::Secant)
             .map_err(|err| FieldsError::Element {
                 index,
                 detail: format!("node pair {}: {}", err.point, err.source),
@@ -250,12 +250,7 @@ fn interface_profile(
             .floor()
             .clamp(0.0, bins as f64 - 1.0) as usize;
         let law = laws.interfaces[i].as_ref().expect("checked above");
-        if let Some(t) = mean_traction(
-            e,
-            law.as_ref(),
-            u,
-            &states.interface[INTERFACE_POINTS * i..],
-        ) {
+        if let Some(t) = mean_traction(e, law, u, &states.interface[INTERFACE_POINTS * i..]) {
             acc[b].0 += e.area;
             acc[b].1 += e.area * t[0];
             acc[b].2 += e.area * t[1];

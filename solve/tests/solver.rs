@@ -3,14 +3,12 @@
 
 use mesh::{Frame, InterfaceElement, InterfaceZone, Model, Region};
 use nalgebra::Vector3;
-use solve::assembly::{
-    ElementLaws, LoadDerivatives, Outputs, SharedBulkLaw, SharedInterfaceLaw, States, System,
-    Tangents,
-};
+use solve::assembly::{ElementLaws, LoadDerivatives, Outputs, States, System, Tangents};
 use solve::laws::elastic::{ElasticInterface, LinearElastic};
 use solve::laws::fczm::{Fczm, DEFAULT_GAMMA};
 use solve::laws::j2::J2;
 use solve::laws::tvergaard::Tvergaard;
+use solve::laws::{AnyBulkLaw, AnyInterfaceLaw};
 use solve::laws::{InterfaceLaw, InterfaceState, TangentKind};
 use solve::linalg::Ordering;
 use solve::nonlinear::{
@@ -19,7 +17,6 @@ use solve::nonlinear::{
 };
 use solve::problems::pullout::solve_pullout;
 use solve::spec::solver::{Forcing, LinearSolverKind, Loading, PathFollowing, SolverSettings};
-use std::sync::Arc;
 
 /// A structured block of hexahedra, each split into 6 positive tets.
 /// Returns (first node index, node index grid accessor dims).
@@ -183,8 +180,8 @@ fn slab_pullout(nz: usize) -> Model {
     m
 }
 
-fn elastic(e: f64, nu: f64) -> SharedBulkLaw {
-    Arc::new(LinearElastic {
+fn elastic(e: f64, nu: f64) -> AnyBulkLaw {
+    AnyBulkLaw::Elastic(LinearElastic {
         young_modulus: e,
         poisson_ratio: nu,
     })
@@ -304,7 +301,7 @@ fn patch_test_uniform_strain_on_perturbed_mesh() {
 #[test]
 fn assembled_tangent_matches_finite_differences() {
     let m = slab_pullout(4);
-    let tv: SharedInterfaceLaw = Arc::new(Tvergaard {
+    let tv: AnyInterfaceLaw = AnyInterfaceLaw::Tvergaard(Tvergaard {
         tensile_strength: 3e6,
         fracture_energy: 100.0,
         lambda0: 2e-6,
@@ -314,7 +311,7 @@ fn assembled_tangent_matches_finite_differences() {
         &m,
         elastic(30e9, 0.2),
         elastic(200e9, 0.3),
-        tv.clone(),
+        tv,
         Some(tv),
     );
     let sys = System::new(&m, &[], &[], &vec![true; m.interfaces.len()]).unwrap();
@@ -515,7 +512,7 @@ fn load_derivatives_match_finite_differences() {
 
 /// Two 1 mm steel blocks joined by one 1 mm × 1 mm interface (paper Fig. 8)
 /// opened or sheared by an imposed displacement of the top face.
-fn fig8(law: SharedInterfaceLaw) -> (Model, ElementLaws, Block, Block) {
+fn fig8(law: AnyInterfaceLaw) -> (Model, ElementLaws, Block, Block) {
     let mut m = Model::default();
     let s = 1e-3;
     let bottom = add_block(
@@ -557,7 +554,7 @@ fn fig8(law: SharedInterfaceLaw) -> (Model, ElementLaws, Block, Block) {
     (m, laws, bottom, top)
 }
 
-fn fig8_run(law: SharedInterfaceLaw, comp: usize, u_final: f64) -> Vec<(f64, f64)> {
+fn fig8_run(law: AnyInterfaceLaw, comp: usize, u_final: f64) -> Vec<(f64, f64)> {
     let (m, laws, bottom, top) = fig8(law);
     let mut dir = Dirichlet::default();
     let mut meas = Measurement {
@@ -640,7 +637,7 @@ fn one_element_model_elastic_law() {
         normal_stiffness: 1.5e11,
         shear_stiffness: 1.5e11,
     };
-    let curve = fig8_run(Arc::new(law), 2, 1e-5);
+    let curve = fig8_run(law.into(), 2, 1e-5);
     assert!(curve.len() >= 10);
     assert_matches(&curve, &law, 0, 1.0);
 }
@@ -650,11 +647,11 @@ fn one_element_model_elastic_law() {
 #[test]
 fn one_element_model_fczm_table2() {
     let law = fczm_table2();
-    let tension = fig8_run(Arc::new(law), 2, 2e-4);
+    let tension = fig8_run(law.into(), 2, 2e-4);
     assert!(tension.iter().any(|c| c.1 > 2.9e6), "peak reached");
     assert!(tension.last().unwrap().1 < 1.5e6, "softening reached");
     assert_matches(&tension, &law, 0, 1.0);
-    let shear = fig8_run(Arc::new(law), 0, 2e-4);
+    let shear = fig8_run(law.into(), 0, 2e-4);
     assert_matches(&shear, &law, 1, 1.0);
 }
 
@@ -670,13 +667,7 @@ fn pullout_laws(m: &Model) -> ElementLaws {
         min_damage: 0.0,
         contact_smoothing: 0.0,
     };
-    ElementLaws::by_region(
-        m,
-        elastic(30e9, 0.2),
-        elastic(200e9, 0.3),
-        Arc::new(f),
-        None,
-    )
+    ElementLaws::by_region(m, elastic(30e9, 0.2), elastic(200e9, 0.3), f.into(), None)
 }
 
 /// A small synthetic pull-out runs to the final displacement with rise, peak
@@ -1205,7 +1196,7 @@ fn snap_back_case() -> (Model, ElementLaws, Loading) {
         &m,
         elastic(30e9, 0.2),
         elastic(2e9, 0.3),
-        Arc::new(brittle),
+        brittle.into(),
         None,
     );
     let loading = Loading {
@@ -1285,12 +1276,12 @@ fn yielding_bar_ends_at_its_limit_load() {
         min_damage: 0.0,
         contact_smoothing: 0.0,
     };
-    let steel: SharedBulkLaw = Arc::new(J2 {
+    let steel: AnyBulkLaw = AnyBulkLaw::J2(J2 {
         young_modulus: 200e9,
         poisson_ratio: 0.3,
         yield_stress: 5e6,
     });
-    let laws = ElementLaws::by_region(&m, elastic(30e9, 0.2), steel, Arc::new(f), None);
+    let laws = ElementLaws::by_region(&m, elastic(30e9, 0.2), steel, f.into(), None);
     let loading = Loading {
         u_final: 1e-4,
         initial_step: 1e-6,
@@ -1341,13 +1332,7 @@ fn debonded_frictionless_bar_ends_unloaded() {
         min_damage: 0.0,
         contact_smoothing: 0.0,
     };
-    let laws = ElementLaws::by_region(
-        &m,
-        elastic(30e9, 0.2),
-        elastic(200e9, 0.3),
-        Arc::new(f),
-        None,
-    );
+    let laws = ElementLaws::by_region(&m, elastic(30e9, 0.2), elastic(200e9, 0.3), f.into(), None);
     let loading = Loading {
         u_final: 5e-3,
         initial_step: 2e-6,

@@ -304,3 +304,25 @@ impl BulkLaw for AnyBulkLaw {
         }
     }
 }
+
+macro_rules! law_into_any {
+    ($any:ident { $($variant:ident($ty:ty)),+ $(,)? }) => {
+        $(impl From<$ty> for $any {
+            fn from(law: $ty) -> Self {
+                $any::$variant(law)
+            }
+        })+
+    };
+}
+
+law_into_any!(AnyBulkLaw {
+    Mazars(mazars::Mazars),
+    J2(j2::J2),
+    Elastic(elastic::LinearElastic),
+});
+law_into_any!(AnyInterfaceLaw {
+    Fczm(fczm::Fczm),
+    Tvergaard(tvergaard::Tvergaard),
+    Coulomb(coulomb::Coulomb),
+    Elastic(elastic::ElasticInterface),
+});

@@ -18,7 +18,7 @@ use super::workspace::{reaction_norm, residual, LinearState, Workspace};
 use crate::assembly::{
     AssemblyError, ElementLaws, LoadDerivatives, Outputs, States, System, Tangents,
 };
-use crate::laws::TangentKind;
+use crate::laws::{BulkLaw, TangentKind};
 use crate::linalg::norm;
 use crate::spec::solver::{
     ConcreteIntegration, LinearSolverKind, Loading, PathFollowing, Predictor, SolverSettings,

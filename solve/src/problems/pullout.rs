@@ -18,6 +18,7 @@
 //!   σ_mb = F / (π d l_adh) (paper eq. 14, Pa).
 
 use crate::assembly::ElementLaws;
+use crate::laws::BulkLaw;
 use crate::nonlinear::{
     run, Checkpoint, Dirichlet, Measurement, Observer, Problem, RunResult, SolveError,
 };

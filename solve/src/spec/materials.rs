@@ -14,7 +14,7 @@
 //! # let _ = element_law;
 //! ```
 
-use crate::assembly::{ElementLaws, SharedBulkLaw, SharedInterfaceLaw};
+use crate::assembly::ElementLaws;
 use crate::laws::coulomb::Coulomb;
 use crate::laws::elastic::{ElasticInterface, LinearElastic};
 use crate::laws::fczm::{Fczm, DEFAULT_GAMMA};
@@ -29,7 +29,6 @@ use geom::spec::NonAdhesive;
 use geom::units::{Dim, RawQuantity, UnitError};
 use mesh::Model;
 use serde::{Deserialize, Serialize};
-use std::sync::Arc;
 
 /// Calibration ratio ξ of eqs. (27)–(28).
 pub const DEFAULT_XI: f64 = 0.72;
@@ -222,21 +221,15 @@ impl Materials {
         model: &Model,
         non_adhesive: NonAdhesive,
     ) -> Result<ElementLaws, ElementLawError> {
-        let steel: SharedBulkLaw = Arc::new(self.steel.law());
-        let adhesive: SharedInterfaceLaw = Arc::new(self.interface.law);
-        let free: Option<SharedInterfaceLaw> = match non_adhesive {
+        let free = match non_adhesive {
             NonAdhesive::Free => None,
-            NonAdhesive::Contact => Some(Arc::new(self.interface.contact_law())),
+            NonAdhesive::Contact => Some(self.interface.contact_law()),
         };
         ElementLaws::sized(
             model,
-            |l| {
-                self.concrete
-                    .at_size(l)
-                    .map(|law| Arc::new(law) as SharedBulkLaw)
-            },
-            steel,
-            adhesive,
+            |l| self.concrete.at_size(l),
+            self.steel.law(),
+            self.interface.law,
             free,
         )
         .map_err(|(tet, source)| ElementLawError {
