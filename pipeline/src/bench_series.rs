@@ -732,7 +732,11 @@ pub fn stress_report(
             .filter(|c| c.record.completed && c.record.ending.as_deref() == Some(kind))
             .count()
     };
-    let (limit_loads, unloaded) = (ended("limit_load"), ended("unloaded"));
+    let (limit_loads, unloaded, brittle) = (
+        ended("limit_load"),
+        ended("unloaded"),
+        ended("brittle_failure"),
+    );
     let panics = cases.iter().filter(|c| c.panicked).count();
     let nans = cases.iter().filter(|c| c.non_finite).count();
     let unexplained = cases.iter().filter(|c| !c.explained()).count();
@@ -746,7 +750,8 @@ pub fn stress_report(
         "# Numerical-stability stress sweep\n\n\
          Command: `{command}`\n\n\
          Study `{}` ({}): {n} cases; {completed} completed ({limit_loads} of them at the \
-         bar's limit load, {unloaded} unloaded: split through or pulled free; \
+         bar's limit load, {brittle} at a brittle failure (the cube splits at its peak), \
+         {unloaded} unloaded: split through or pulled free; \
          docs/solver.md, \"How a run ends\"), {} stopped with a reason, \
          {panics} panics, {nans} with a non-finite value in curve.csv, {unexplained} unexplained, \
          {energy_fail} failing the energy check (tolerance {} of W_ext on the converged steps).\n\n\

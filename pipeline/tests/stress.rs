@@ -194,3 +194,39 @@ fn impl_ex_concrete_runs_through_the_threshold_two_cycles() {
     assert!(distance < 0.03, "curve distance {distance}");
     std::fs::remove_dir_all(&work).unwrap();
 }
+
+/// A stiff, rough interface (λ_0 = 1e-6 m, δ_s = 0.16, μ = 0.3: stress
+/// sweep case 19) pushes the small cube apart until it splits at its peak:
+/// displacement control finds no equilibrium beyond it and dissipation
+/// control snaps back towards λ = 0 with damage spreading through the
+/// concrete. The run ends as a result, `brittle_failure`, whose force is
+/// the last converged step's, and exits 0 with its curve.
+#[test]
+fn a_cube_that_splits_at_its_peak_ends_at_a_brittle_failure() {
+    let work = std::env::temp_dir().join(format!("ribbar-split-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&work);
+    let (out, solve) = run_tiny_ribbed(&work, &["--set", "materials.interface.lambda0=1e-6m"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_eq!(solve["completed"], true, "{solve}");
+    let ending = &solve["ending"];
+    assert_eq!(ending["kind"], "brittle_failure", "{solve}");
+    let curve = std::fs::read_to_string(work.join("tiny-ribbed/curve.csv")).unwrap();
+    let rows = pipeline::post::parse_curve_csv(&curve, Path::new("curve.csv")).unwrap();
+    let last = rows.last().unwrap();
+    assert_eq!(ending["force"].as_f64().unwrap(), last.force);
+    assert_eq!(ending["u_imposed"].as_f64().unwrap(), last.u_imposed);
+    // Ended short of u_final, below half of its λ on the way back, with
+    // damage growing in at least 1 % of the concrete.
+    assert!(last.u_imposed < 0.3e-3, "{solve}");
+    assert!(ending["snap_back_to"].as_f64().unwrap() < 0.5 * last.u_imposed);
+    let (growing, concrete) = (
+        ending["damaging_concrete_tets"].as_u64().unwrap(),
+        ending["concrete_tets"].as_u64().unwrap(),
+    );
+    assert!(100 * growing >= concrete, "{solve}");
+    std::fs::remove_dir_all(&work).unwrap();
+}

@@ -307,13 +307,7 @@ fn assembled_tangent_matches_finite_differences() {
         lambda0: 2e-6,
         delta_s: 1.0,
     });
-    let laws = ElementLaws::by_region(
-        &m,
-        elastic(30e9, 0.2),
-        elastic(200e9, 0.3),
-        tv,
-        Some(tv),
-    );
+    let laws = ElementLaws::by_region(&m, elastic(30e9, 0.2), elastic(200e9, 0.3), tv, Some(tv));
     let sys = System::new(&m, &[], &[], &vec![true; m.interfaces.len()]).unwrap();
     let n = 3 * m.nodes.len();
     // A displacement with the steel side sliding and opening past λ_0.
@@ -854,6 +848,7 @@ fn diverging_case_keeps_converged_steps() {
                 step,
                 u_imposed,
                 step_size: 0.0,
+                step_unit: "m",
                 residual_history,
                 cause,
                 partial,

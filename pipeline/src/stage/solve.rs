@@ -320,9 +320,10 @@ fn split_outcome(
             residual_history,
             cause,
             step_size,
+            step_unit,
         }) => {
             let why = format!(
-            "step {step} did not converge at the minimum step size {step_size:e} m (imposed u = {u_imposed:e} m); \
+            "step {step} did not converge at the minimum step size {step_size:e} {step_unit} (imposed u = {u_imposed:e} m); \
              residual history {residual_history:?}; likely cause: {cause}"
         );
             (*partial, Some(why))
@@ -412,6 +413,22 @@ fn report_ending(ctx: &Ctx, ending: &solve::nonlinear::Ending) {
                 force,
                 100.0 * force / yield_force,
                 yield_force
+            ));
+        }
+        solve::nonlinear::Ending::BrittleFailure {
+            force,
+            u_imposed,
+            snap_back_to,
+            damaging_concrete_tets,
+            concrete_tets,
+        } => {
+            ctx.printer.line(&format!(
+                "solve: ended at a brittle failure: F = {force:.1} N at u = {:.4} mm is the \
+                 failure load; beyond it the path snaps back to u = {:.4} mm with concrete \
+                 damage spreading in {damaging_concrete_tets} of {concrete_tets} concrete tets \
+                 (the cube splits: no quasi-static continuation under a growing pull)",
+                u_imposed * 1e3,
+                snap_back_to * 1e3
             ));
         }
         solve::nonlinear::Ending::Unloaded {

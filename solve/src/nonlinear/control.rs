@@ -283,3 +283,13 @@ pub enum ControlMode {
     /// The energy released by the step (dissipation control), J.
     Energy,
 }
+
+impl ControlMode {
+    /// The unit of a step size in this mode.
+    pub fn step_unit(self) -> &'static str {
+        match self {
+            ControlMode::Displacement | ControlMode::FreeEnd => "m",
+            ControlMode::Energy => "J",
+        }
+    }
+}

@@ -87,13 +87,15 @@ pub enum SolveError {
     Checkpoint(String),
     #[error(
         "step {step} did not converge at the minimum step size: imposed displacement {u_imposed:e} m \
-         (step {step_size:e} m); residual history {residual_history:?}; likely cause: {cause}; \
+         (step {step_size:e} {step_unit}); residual history {residual_history:?}; likely cause: {cause}; \
          {} converged steps kept", partial.rows.len()
     )]
     Stalled {
         step: usize,
         u_imposed: f64,
+        /// In the unit of the step's control: m (λ, FED) or J (energy).
         step_size: f64,
+        step_unit: &'static str,
         residual_history: Vec<f64>,
         cause: Box<StepFailure>,
         partial: Box<RunResult>,

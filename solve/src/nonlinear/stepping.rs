@@ -65,6 +65,13 @@ const LIMIT_SHARE: f64 = 0.9;
 const PLATEAU: f64 = 1e-3;
 /// A load below this fraction of its largest value counts as unloaded.
 const UNLOADED: f64 = 1e-3;
+/// A dissipation-controlled attempt whose last iterate puts λ below this
+/// share of the last converged λ has found the path snapping back towards
+/// the origin (see [`Stepper::brittle_failure`]).
+const SNAP_BACK: f64 = 0.5;
+/// ... and concrete damage growing in at least this share of the
+/// concrete tets in that iterate: a failure spreading through the cube.
+const SPREADING: f64 = 0.01;
 
 /// The converged state of a run between steps.
 struct Path {
@@ -748,10 +755,14 @@ impl<'a> Driver<'a> {
             if let Some(limit) = self.limit_load(&path, &reason) {
                 return Ok(Outcome::End(limit, path));
             }
+            if let Some(failure) = self.brittle_failure(&path, plan, lambda, &reason) {
+                return Ok(Outcome::End(failure, path));
+            }
             return Err(SolveError::Stalled {
                 step,
                 u_imposed: lambda,
                 step_size: plan.size,
+                step_unit: plan.mode.step_unit(),
                 residual_history: attempt.history,
                 cause: Box::new(reason),
                 partial: self.partial(path, plan.size),
@@ -774,6 +785,42 @@ impl<'a> Driver<'a> {
         let yielding = reason.regimes().is_none_or(|r| r.steel_yield > 0);
         (yielding && force.abs() >= LIMIT_SHARE * yield_force)
             .then_some(Ending::LimitLoad { force, yield_force })
+    }
+
+    /// The end of a run whose specimen fails unstably (a brittle split of
+    /// the cube): displacement control found no equilibrium beyond the last
+    /// converged step, and at the minimum dissipation step the attempt's
+    /// last iterate sits at λ below [`SNAP_BACK`] of the last converged λ
+    /// with concrete damage growing in at least [`SPREADING`] of the
+    /// concrete tets. The energy stored at the
+    /// last converged step then drives the failure with the load falling
+    /// back towards zero: under a monotone imposed displacement the
+    /// specimen fails dynamically at that step, so there is no
+    /// quasi-static continuation and its force is the failure load.
+    fn brittle_failure(
+        &self,
+        path: &Path,
+        plan: &Plan,
+        lambda: f64,
+        reason: &StepFailure,
+    ) -> Option<Ending> {
+        let last = path.rows.last()?;
+        let regimes = reason.regimes()?;
+        let model = self.problem.model;
+        let concrete = model
+            .tet_region
+            .iter()
+            .filter(|r| **r == mesh::Region::Concrete)
+            .count();
+        let snapped_back = plan.mode == ControlMode::Energy && lambda < SNAP_BACK * path.lambda;
+        let spreading = regimes.concrete_damage as f64 >= SPREADING * concrete as f64;
+        (snapped_back && spreading).then_some(Ending::BrittleFailure {
+            force: last.force,
+            u_imposed: path.lambda,
+            snap_back_to: lambda,
+            damaging_concrete_tets: regimes.concrete_damage,
+            concrete_tets: concrete,
+        })
     }
 
     /// The end of the run on the loaded member's yield plateau: the last

@@ -105,4 +105,22 @@ pub enum Ending {
         /// a layer of them).
         broken_concrete_tets: usize,
     },
+    /// The specimen fails unstably (a brittle split of the cube): the
+    /// equilibrium path beyond the last converged step snaps back towards
+    /// the origin while concrete damage spreads, so a monotone imposed
+    /// displacement has no quasi-static continuation and the last force is
+    /// the failure load.
+    BrittleFailure {
+        /// The last converged force (whole specimen), N: the failure load.
+        force: f64,
+        /// Imposed displacement of the last converged step, m.
+        u_imposed: f64,
+        /// The imposed displacement the dissipation-controlled attempt
+        /// fell back to, m.
+        snap_back_to: f64,
+        /// Concrete tets whose damage grew in that attempt's last iterate,
+        /// of all concrete tets.
+        damaging_concrete_tets: usize,
+        concrete_tets: usize,
+    },
 }
