@@ -69,6 +69,8 @@ pub struct GeometryReport {
     pub end_clearance_m: Option<f64>,
     /// Entities per physical group in the built model.
     pub group_entities: BTreeMap<String, usize>,
+    /// The worst-closing periodic face (None for a model without one).
+    pub periodic_face_gap: Option<PeriodicFaceGap>,
     /// Triangles of the parry3d tessellation.
     pub tessellation_triangles: usize,
     pub gmsh_version: String,
@@ -110,7 +112,7 @@ pub enum GeomError {
 const MEASURE_PY: &str = r#"
 import json, sys
 import gmsh
-geo, out = sys.argv[1], sys.argv[2]
+geo, out, model_per_m = sys.argv[1], sys.argv[2], float(sys.argv[3])
 gmsh.initialize(["-noenv"], interruptible=False)
 gmsh.option.setNumber("General.Terminal", 0)
 gmsh.logger.start()
@@ -124,12 +126,21 @@ if not res["errors"]:
     for dim, tag in gmsh.model.getPhysicalGroups():
         name = gmsh.model.getPhysicalName(dim, tag)
         ents = gmsh.model.getEntitiesForPhysicalGroup(dim, tag)
+        # getMass is in model units: back to SI (m^dim).
         res["groups"][name] = {"count": len(ents),
-                               "mass": sum(gmsh.model.occ.getMass(dim, int(e)) for e in ents)}
+                               "mass": sum(gmsh.model.occ.getMass(dim, int(e)) for e in ents)
+                                       / model_per_m ** dim}
     bounded = set(abs(t) for _, t in gmsh.model.getBoundary(gmsh.model.getEntities(2), combined=False, oriented=False))
     res["free_curves"] = len([t for _, t in gmsh.model.getEntities(1) if t not in bounded])
     bounded = set(abs(t) for _, t in gmsh.model.getBoundary(gmsh.model.getEntities(3), combined=False, oriented=False))
     res["free_surfaces"] = len([t for _, t in gmsh.model.getEntities(2) if t not in bounded])
+    worst = None
+    for _, t in gmsh.model.getEntities(2):
+        if gmsh.model.getType(2, t) in PERIODIC:
+            g = parametric_gap(t)
+            if worst is None or g["gap"] / g["tolerance"] > worst["gap"] / worst["tolerance"]:
+                worst = dict(g, surface=t)
+    res["periodic_gap"] = worst
 with open(out, "w") as f:
     json.dump(res, f)
 gmsh.finalize()
@@ -143,6 +154,33 @@ struct Measured {
     free_curves: usize,
     #[serde(default)]
     free_surfaces: usize,
+    #[serde(default)]
+    periodic_gap: Option<PeriodicFaceGap>,
+}
+
+/// The periodic (cylindrical) face of the built model whose boundary comes
+/// closest to not closing in gmsh's parameter space: gmsh's periodic-face
+/// mesher chains the boundary curves with a tolerance of 1e-6 of the face's
+/// parameter diagonal, and fails on a face whose curves meet farther apart
+/// (the 35° failure before the model was built in millimetres;
+/// docs/geometry.md).
+#[derive(Debug, Clone, PartialEq, Serialize, serde::Deserialize)]
+pub struct PeriodicFaceGap {
+    /// gmsh tag of the surface (in the model `specimen.geo` builds).
+    pub surface: i32,
+    /// gmsh tag of the point where two boundary curves' ends disagree most.
+    pub point: i32,
+    /// Their distance in the face's parameter space (rad, model units).
+    pub gap: f64,
+    /// gmsh's first chaining tolerance for the face.
+    pub tolerance: f64,
+}
+
+impl PeriodicFaceGap {
+    /// gap / tolerance: below 1 gmsh chains the boundary at its first try.
+    pub fn ratio(&self) -> f64 {
+        self.gap / self.tolerance
+    }
 }
 
 #[derive(serde::Deserialize)]
@@ -198,9 +236,15 @@ pub fn build_geometry(
     let tess = tessellated(&layout, &[(0.0, layout.l_adh), (layout.l_adh, layout.l)]);
 
     let measure_out = out_dir.join(format!(".occ-measure-{}.json", std::process::id()));
+    let model_per_m = crate::geo::model_units_per_m(&layout).to_string();
+    let script = format!("{}{MEASURE_PY}", crate::diagnose::PARAMETRIC_GAP_PY);
     let run = gmsh.run_python(
-        MEASURE_PY,
-        &[geo_path.as_os_str(), measure_out.as_os_str()],
+        &script,
+        &[
+            geo_path.as_os_str(),
+            measure_out.as_os_str(),
+            std::ffi::OsStr::new(&model_per_m),
+        ],
         out_dir,
         GMSH_TIMEOUT,
     );
@@ -323,6 +367,7 @@ pub fn build_geometry(
         plane_clearance_m: layout.ribs.as_ref().map(|r| r.clearance_cube),
         end_clearance_m: layout.ribs.as_ref().map(|r| r.clearance_ends),
         group_entities,
+        periodic_face_gap: measured.periodic_gap,
         tessellation_triangles: tess.triangles,
         gmsh_version: gmsh.version().to_string(),
         gmsh_build_seconds: run.elapsed.as_secs_f64(),

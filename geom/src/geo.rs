@@ -40,6 +40,32 @@ pub mod groups {
     pub const SYMMETRY_Y: &str = "symmetry_y";
 }
 
+/// Model units of a ribbed bar's script per metre: the solid is built in
+/// millimetres.
+///
+/// OpenCASCADE's tolerances are absolute (Precision::Confusion = 1e-7 model
+/// units) and gmsh chains the boundary of a periodic (cylindrical) face in
+/// its parameter space (angle in rad, height in model units) with a
+/// tolerance of 1e-6 of that space's diagonal. Built in metres, the rib feet
+/// (intersections of the ribs' B-spline flanks with the core cylinder) ended
+/// up to 2e-6 rad away from the longitudinal ribs' foot lines, above gmsh's
+/// tolerance on the core faces between ribs, whose height span is only
+/// ~0.01 m: gmsh could not mesh them ("Impossible to mesh periodic surface",
+/// the 35° failure; docs/geometry.md). In millimetres the same ends agree to
+/// ~2e-8 rad and the tolerance is larger. The saved mesh is scaled back to
+/// metres (`Mesh.ScalingFactor`). A smooth bar has no such faces and stays
+/// in metres ([`model_units_per_m`]), so its meshes are those it always had.
+pub const MODEL_UNITS_PER_M: f64 = 1000.0;
+
+/// Model units per metre of the script `write_geo` writes for `layout`.
+pub fn model_units_per_m(layout: &Layout) -> f64 {
+    if layout.ribs.is_some() {
+        MODEL_UNITS_PER_M
+    } else {
+        1.0
+    }
+}
+
 fn num(v: f64) -> String {
     // Shortest round-trip representation: the script reproduces the layout exactly.
     let s = format!("{v:?}");
@@ -50,8 +76,106 @@ fn num(v: f64) -> String {
     }
 }
 
+/// A length of a ribbed bar's layout (m) in model units.
+fn length(v: f64) -> String {
+    num(v * MODEL_UNITS_PER_M)
+}
+
+/// How a transverse rib's section continues below the core surface, so
+/// that the ribs overlap the core in the union.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum RibRoot {
+    /// The flanks continue straight down to `depth` below the core (m).
+    Straight { depth: f64 },
+    /// The flanks continue down to `kink`, then the sides go radially
+    /// (constant axial width) down to `depth` below the core (m).
+    Kinked { kink: f64, depth: f64 },
+}
+
+impl RibRoot {
+    fn of(r: f64, rl: &crate::layout::RibLayout) -> RibRoot {
+        let depth = 0.5 * (0.05 * r).min(0.5 * rl.a);
+        // Continued flanks widen the base below the core: the facing flanks
+        // of neighbouring ribs meet `meet` below it. Half way there the
+        // widened bases still keep half the axial gap c − wb between them.
+        let meet = if rl.wb > rl.wt {
+            rl.a * (rl.c - rl.wb) / (rl.wb - rl.wt)
+        } else {
+            f64::INFINITY
+        };
+        let kink = 0.5 * meet;
+        if kink >= depth {
+            RibRoot::Straight { depth }
+        } else {
+            // Ribs near the overlap bound (b_base close to 0.98 c sin β).
+            // Straight flanks there either overlap the neighbours inside the
+            // core, with their crossing edge just below the core surface, or
+            // stop within a few hundredths of a mm of it, a base face nearly
+            // parallel to the core: both made OpenCASCADE's boolean with the
+            // core inconsistent (rib volumes off by 2–8 %, faces lost;
+            // docs/geometry.md). The kink keeps the neighbours apart and the
+            // base deep; the band below it is at least as thick as the kink
+            // is deep.
+            RibRoot::Kinked {
+                kink,
+                depth: depth.max(2.0 * kink),
+            }
+        }
+    }
+
+    /// `.geo` variables: r_in, wb_in (and r_k, wb_k for a kinked root).
+    fn geo_variables(&self) -> String {
+        match *self {
+            RibRoot::Straight { depth } => format!(
+                "r_in = R - {d};\nwb_in = wb + (wb - wt) * {d} / a;\n",
+                d = length(depth)
+            ),
+            RibRoot::Kinked { kink, depth } => format!(
+                "// Near the overlap bound: flanks continued to the kink, then radial sides.\n\
+                 r_k = R - {k};\nwb_k = wb + (wb - wt) * {k} / a;\nr_in = R - {d};\nwb_in = wb_k;\n",
+                k = length(kink),
+                d = length(depth)
+            ),
+        }
+    }
+
+    /// The section loop at angle t (inside the `.geo`'s section loop).
+    fn geo_section(&self) -> &'static str {
+        match self {
+            RibRoot::Straight { .. } => {
+                "\x20     q1 = newp; Point(q1) = {r_in * cx, r_in * cy, zc - wb_in / 2};
+      q2 = newp; Point(q2) = {(R + a) * cx, (R + a) * cy, zc - wt / 2};
+      q3 = newp; Point(q3) = {(R + a) * cx, (R + a) * cy, zc + wt / 2};
+      q4 = newp; Point(q4) = {r_in * cx, r_in * cy, zc + wb_in / 2};
+      e1 = newc; Line(e1) = {q1, q2}; e2 = newc; Line(e2) = {q2, q3};
+      e3 = newc; Line(e3) = {q3, q4}; e4 = newc; Line(e4) = {q4, q1};
+      ll = newll; Curve Loop(ll) = {e1, e2, e3, e4};
+      loops() += ll; sec() += {e1, e2, e3, e4};
+"
+            }
+            RibRoot::Kinked { .. } => {
+                "\x20     q1 = newp; Point(q1) = {r_in * cx, r_in * cy, zc - wb_in / 2};
+      q5 = newp; Point(q5) = {r_k * cx, r_k * cy, zc - wb_k / 2};
+      q2 = newp; Point(q2) = {(R + a) * cx, (R + a) * cy, zc - wt / 2};
+      q3 = newp; Point(q3) = {(R + a) * cx, (R + a) * cy, zc + wt / 2};
+      q6 = newp; Point(q6) = {r_k * cx, r_k * cy, zc + wb_k / 2};
+      q4 = newp; Point(q4) = {r_in * cx, r_in * cy, zc + wb_in / 2};
+      e1 = newc; Line(e1) = {q1, q5}; e5 = newc; Line(e5) = {q5, q2};
+      e2 = newc; Line(e2) = {q2, q3};
+      e3 = newc; Line(e3) = {q3, q6}; e6 = newc; Line(e6) = {q6, q4};
+      e4 = newc; Line(e4) = {q4, q1};
+      ll = newll; Curve Loop(ll) = {e1, e5, e2, e3, e6, e4};
+      loops() += ll; sec() += {e1, e5, e2, e3, e6, e4};
+"
+            }
+        }
+    }
+}
+
 /// Writes the `.geo` text for `layout`.
 pub fn write_geo(layout: &Layout) -> String {
+    let upm = model_units_per_m(layout);
+    let length = |v: f64| num(v * upm);
     let mut g = String::new();
     let w = &mut g;
     let l = layout.l;
@@ -60,30 +184,37 @@ pub fn write_geo(layout: &Layout) -> String {
     let quarter = layout.symmetry == Symmetry::Quarter;
     let _ = writeln!(
         w,
-        "// Pull-out specimen: bar along z in a concrete cube (SPEC §2 frame), SI units (m).\n\
+        "// Pull-out specimen: bar along z in a concrete cube (SPEC §2 frame).\n\
          // Cube x, y in [-L/2, L/2], z in [0, L]; z = 0 free face, z = L loaded (bearing) face.\n\
          SetFactory(\"OpenCASCADE\");\n\
+         \n\
+         // Model units: mm (OpenCASCADE's absolute tolerances and gmsh's parametric ones\n\
+         // suit millimetre-sized features); the saved mesh is scaled to metres.\n\
+         model_per_m = {upm};\n\
+         Mesh.ScalingFactor = 1 / model_per_m;\n\
          \n\
          // Bounding boxes from the tessellation: OCC's own boxes of curved faces are\n\
          // loose and would catch or miss faces in the selections below.\n\
          Geometry.OCCBoundsUseStl = 1;\n\
          \n\
-         // Mesh sizes (m). The mesh stage passes -setnumber h_interface/h_outer;\n\
-         // the defaults only make the script usable on its own.\n\
+         // Mesh sizes (m, converted to model units in the size field). The mesh stage\n\
+         // passes -setnumber h_interface/h_outer; the defaults only make the script\n\
+         // usable on its own.\n\
          DefineConstant[\n  h_interface = {{{hi}, Name \"Parameters/h_interface\"}},\n  h_outer = {{{ho}, Name \"Parameters/h_outer\"}}\n];\n\
          \n\
-         // Specimen dimensions.\n\
+         // Specimen dimensions (model units).\n\
          L = {L};\nl_adh = {ladh};\nz_lo = {zlo};\nz_hi = {zhi};\nR = {R};\nr_out = {rout};\n\
          tol = {tol};",
+        upm = num(upm),
         hi = num(DEFAULT_H_INTERFACE),
         ho = num(DEFAULT_H_OUTER),
-        L = num(l),
-        ladh = num(layout.l_adh),
-        zlo = num(layout.z_lo),
-        zhi = num(layout.z_hi),
-        R = num(layout.r),
-        rout = num(r_out),
-        tol = num(1e-6 * l),
+        L = length(l),
+        ladh = length(layout.l_adh),
+        zlo = length(layout.z_lo),
+        zhi = length(layout.z_hi),
+        R = length(layout.r),
+        rout = length(r_out),
+        tol = length(1e-6 * l),
     );
     let _ = writeln!(
         w,
@@ -96,6 +227,7 @@ pub fn write_geo(layout: &Layout) -> String {
         }
         Some(rl) => {
             let dip = 0.05 * layout.r;
+            let root = RibRoot::of(layout.r, rl);
             let _ = writeln!(
                 w,
                 "\n// Longitudinal ribs at theta = 0 and pi: isosceles trapezoid (height a_l,\n\
@@ -117,11 +249,11 @@ pub fn write_geo(layout: &Layout) -> String {
                  \x20 ex() = Extrude {{0, 0, z_hi - z_lo}} {{ Surface{{s}}; }};\n\
                  \x20 lrib() += ex(1);\n\
                  EndFor",
-                al = num(rl.a_l),
-                blt = num(rl.bl_top),
-                blb = num(rl.bl_base),
-                xf = num(rl.x_foot),
-                dip = num(dip),
+                al = length(rl.a_l),
+                blt = length(rl.bl_top),
+                blb = length(rl.bl_base),
+                xf = length(rl.x_foot),
+                dip = length(dip),
             );
             let _ = writeln!(
                 w,
@@ -132,7 +264,7 @@ pub fn write_geo(layout: &Layout) -> String {
                  // ribs. Side B (global angle t + pi): sgn = +1 rotated image, -1 mirrored.\n\
                  // The section curves stay in the model after ThruSections: delete them.\n\
                  a = {a};\nc = {c};\nK = {k};\nwb = {wb};\nwt = {wt};\nt_s = {ts};\nn_sec = {nsec};\n\
-                 r_in = R - {dip};\nwb_in = wb + (wb - wt) * {dip} / a;\n\
+                 {root_vars}\
                  zeta0() = {{{za0}, {zb0}}};\nn_rib() = {{{na}, {nb}}};\nsgn_side() = {{1, {sgb}}};\n\
                  ribs() = {{}};\n\
                  For sd In {{0:1}}\n\
@@ -143,14 +275,7 @@ pub fn write_geo(layout: &Layout) -> String {
                  \x20     t = t_s + j * (Pi - 2 * t_s) / (n_sec - 1);\n\
                  \x20     zc = zeta + sgn_side(sd) * K * Cos(t);\n\
                  \x20     cx = Cos(t + sd * Pi); cy = Sin(t + sd * Pi);\n\
-                 \x20     q1 = newp; Point(q1) = {{r_in * cx, r_in * cy, zc - wb_in / 2}};\n\
-                 \x20     q2 = newp; Point(q2) = {{(R + a) * cx, (R + a) * cy, zc - wt / 2}};\n\
-                 \x20     q3 = newp; Point(q3) = {{(R + a) * cx, (R + a) * cy, zc + wt / 2}};\n\
-                 \x20     q4 = newp; Point(q4) = {{r_in * cx, r_in * cy, zc + wb_in / 2}};\n\
-                 \x20     e1 = newc; Line(e1) = {{q1, q2}}; e2 = newc; Line(e2) = {{q2, q3}};\n\
-                 \x20     e3 = newc; Line(e3) = {{q3, q4}}; e4 = newc; Line(e4) = {{q4, q1}};\n\
-                 \x20     ll = newll; Curve Loop(ll) = {{e1, e2, e3, e4}};\n\
-                 \x20     loops() += ll; sec() += {{e1, e2, e3, e4}};\n\
+                 {section}\
                  \x20   EndFor\n\
                  \x20   v = newv; ThruSections(v) = {{loops()}};\n\
                  \x20   Recursive Delete {{ Curve{{sec()}}; }}\n\
@@ -164,16 +289,17 @@ pub fn write_geo(layout: &Layout) -> String {
                  // Trim the ribs that cross the bar ends.\n\
                  trim = newv; Cylinder(trim) = {{0, 0, z_lo, 0, 0, z_hi - z_lo, r_out + R}};\n\
                  bar() = BooleanIntersection{{ Volume{{bar()}}; Delete; }}{{ Volume{{trim}}; Delete; }};",
-                a = num(rl.a),
-                c = num(rl.c),
-                k = num(rl.k),
-                wb = num(rl.wb),
-                wt = num(rl.wt),
+                a = length(rl.a),
+                c = length(rl.c),
+                k = length(rl.k),
+                wb = length(rl.wb),
+                wt = length(rl.wt),
                 ts = num(rl.t_s),
                 nsec = RIB_SECTIONS,
-                dip = num(0.5 * dip.min(0.5 * rl.a)),
-                za0 = num(rl.sides[0].zeta.first().copied().unwrap_or(0.0)),
-                zb0 = num(rl.sides[1].zeta.first().copied().unwrap_or(0.0)),
+                root_vars = root.geo_variables(),
+                section = root.geo_section(),
+                za0 = length(rl.sides[0].zeta.first().copied().unwrap_or(0.0)),
+                zb0 = length(rl.sides[1].zeta.first().copied().unwrap_or(0.0)),
                 na = rl.sides[0].zeta.len(),
                 nb = rl.sides[1].zeta.len(),
                 sgb = num(rl.sides[1].sign),
@@ -303,9 +429,11 @@ pub fn write_geo(layout: &Layout) -> String {
         "\n// Size field (SPEC §9): h(r) = min(h_outer, h_interface + k max(0, r - r_out)),\n\
          // r the distance to the bar axis: the whole bar and the interface at\n\
          // h_interface, growing linearly to h_outer at the cube's side faces.\n\
-         k_grow = (h_outer - h_interface) / (L / 2 - r_out);\n\
+         h_in = h_interface * model_per_m;\n\
+         h_out = h_outer * model_per_m;\n\
+         k_grow = (h_out - h_in) / (L / 2 - r_out);\n\
          Field[1] = MathEval;\n\
-         Field[1].F = Sprintf(\"Min(%.12g, %.12g + %.12g * Max(0, Sqrt(x * x + y * y) - %.12g))\", h_outer, h_interface, k_grow, r_out);\n\
+         Field[1].F = Sprintf(\"Min(%.12g, %.12g + %.12g * Max(0, Sqrt(x * x + y * y) - %.12g))\", h_out, h_in, k_grow, r_out);\n\
          Background Field = 1;\n\
          // Only the field sets sizes.\n\
          Mesh.MeshSizeFromPoints = 0;\n\

@@ -11,6 +11,7 @@
 //! ```
 
 pub mod build;
+pub mod diagnose;
 pub mod fsutil;
 pub mod geo;
 pub mod gmsh;

@@ -99,6 +99,9 @@ pub struct RawRibs {
     pub angle: Option<RawQuantity>,
     pub top_width: Option<RawQuantity>,
     pub base_width: Option<RawQuantity>,
+    /// Flank inclination to the core surface; sets the base width
+    /// (b_base = b_top + 2a / tan α) instead of `base_width`.
+    pub flank_angle: Option<RawQuantity>,
     pub side_b: Option<SideB>,
     pub phase: Option<RawQuantity>,
 }
@@ -288,6 +291,21 @@ fn len(q: &Option<RawQuantity>, key: &str, default: f64) -> Result<f64, SpecErro
     }
 }
 
+/// An angle (rad); a plain number above π/2 is taken for degrees written
+/// without unit and rejected with a hint.
+fn angle(q: &RawQuantity, key: &str) -> Result<f64, SpecError> {
+    let v = q.to_si(Dim::Angle, key)?;
+    if let RawQuantity::Number(n) = q {
+        if *n > FRAC_PI_2 {
+            return Err(SpecError::AngleInRadians {
+                key: key.into(),
+                value: *n,
+            });
+        }
+    }
+    Ok(v)
+}
+
 /// Resolves and validates `bar` and `specimen` (SPEC §2, §3). Errors name the
 /// dotted key, its value with unit and the violated bound.
 pub fn resolve(bar: &RawBar, specimen: &RawSpecimen) -> Result<(Bar, Specimen), SpecError> {
@@ -431,18 +449,7 @@ fn resolve_ribs(raw: RawRibs, raw_l: RawLongitudinalRibs, d: f64) -> Result<Ribs
 
     let beta = match &raw.angle {
         None => defaults::RIB_ANGLE_DEG.to_radians(),
-        Some(q) => {
-            let v = q.to_si(Dim::Angle, "bar.ribs.angle")?;
-            if let RawQuantity::Number(n) = q {
-                if *n > FRAC_PI_2 {
-                    return Err(SpecError::AngleInRadians {
-                        key: "bar.ribs.angle".into(),
-                        value: *n,
-                    });
-                }
-            }
-            v
-        }
+        Some(q) => angle(q, "bar.ribs.angle")?,
     };
     bound(
         "bar.ribs.angle",
@@ -459,10 +466,39 @@ fn resolve_ribs(raw: RawRibs, raw_l: RawLongitudinalRibs, d: f64) -> Result<Ribs
         defaults::RIB_TOP_WIDTH_PER_D * d,
     )?;
     positive("bar.ribs.top_width", b_top)?;
-    let b_base = len(&raw.base_width, "bar.ribs.base_width", b_top + 2.0 * a)?;
-    positive("bar.ribs.base_width", b_base)?;
+    let b_base = match (&raw.base_width, &raw.flank_angle) {
+        (Some(_), Some(_)) => {
+            return Err(SpecError::Inconsistent {
+                key: "bar.ribs.flank_angle".into(),
+                problem: "given together with bar.ribs.base_width; the flank angle sets the \
+                          base width (b_top + 2 a / tan(flank_angle)): give one of them"
+                    .into(),
+            })
+        }
+        (_, Some(q)) => {
+            let alpha = angle(q, "bar.ribs.flank_angle")?;
+            bound(
+                "bar.ribs.flank_angle",
+                alpha,
+                Dim::Angle,
+                alpha > 0.0 && alpha <= FRAC_PI_2 * (1.0 + 1e-12),
+                "in (0, 90] deg (90 = flanks perpendicular to the core)",
+            )?;
+            // cos/sin rather than 1/tan: exactly b_top at 90°.
+            let alpha = alpha.min(FRAC_PI_2);
+            b_top + 2.0 * a * alpha.cos() / alpha.sin()
+        }
+        (raw_base, None) => len(raw_base, "bar.ribs.base_width", b_top + 2.0 * a)?,
+    };
+    // A base width derived from the flank angle is reported as such.
+    let base_key = if raw.flank_angle.is_some() {
+        "bar.ribs.base_width (b_top + 2a / tan(bar.ribs.flank_angle))"
+    } else {
+        "bar.ribs.base_width"
+    };
+    positive(base_key, b_base)?;
     bound(
-        "bar.ribs.base_width",
+        base_key,
         b_base,
         Dim::Length,
         b_base >= b_top,
@@ -473,12 +509,13 @@ fn resolve_ribs(raw: RawRibs, raw_l: RawLongitudinalRibs, d: f64) -> Result<Ribs
     )?;
     let gap_limit = c * beta.sin();
     bound(
-        "bar.ribs.base_width",
+        base_key,
         b_base,
         Dim::Length,
         b_base < 0.98 * gap_limit,
         format!(
-            "< 0.98 c sin(beta) = {} (neighbouring ribs would overlap: c = {}, beta = {} deg)",
+            "< 0.98 c sin(beta) = {} (neighbouring ribs would overlap: c = {}, beta = {} deg; \
+             narrow the ribs or raise bar.ribs.spacing or bar.ribs.angle)",
             mm(0.98 * gap_limit),
             mm(c),
             beta.to_degrees()
@@ -731,6 +768,50 @@ mod tests {
             "{msg}"
         );
         assert!(serde_yaml::from_str::<RawSpecimen>("{symmetry: half}").is_err());
+    }
+
+    /// `bar.ribs.flank_angle` sets b_base = b_top + 2a / tan α (90° gives b_top); it excludes `base_width`, and
+    /// out-of-range or overlapping results name the flank angle (issue 15: flank angle 30–60°).
+    #[test]
+    fn flank_angle_sets_the_base_width() {
+        let ribs = |r: &str| {
+            try_resolve(
+                &format!("{{kind: ribbed, diameter: 10 mm, ribs: {r}}}"),
+                "{}",
+            )
+        };
+        let base = |r: &str| ribs(r).unwrap().0.ribs.unwrap().transverse.base_width;
+        // a = 0.65 mm, b_top = 1 mm by default.
+        let at30 = base("{flank_angle: 30 deg}");
+        assert!(
+            (at30 - (1e-3 + 2.0 * 0.65e-3 * 3f64.sqrt())).abs() < 1e-12,
+            "{at30}"
+        );
+        assert!((base("{flank_angle: 45 deg}") - base("{}")).abs() < 1e-12);
+        assert_eq!(base("{flank_angle: 90 deg}"), 1e-3);
+        let msg = ribs("{flank_angle: 40 deg, base_width: 2 mm}")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            msg.contains("bar.ribs.flank_angle") && msg.contains("base_width"),
+            "{msg}"
+        );
+        for bad in ["0 deg", "100 deg"] {
+            let msg = ribs(&format!("{{flank_angle: {bad}}}"))
+                .unwrap_err()
+                .to_string();
+            assert!(
+                msg.contains("bar.ribs.flank_angle") && msg.contains("(0, 90]"),
+                "{msg}"
+            );
+        }
+        let msg = ribs("{flank_angle: 30 deg, height: 1.5 mm, spacing: 4 mm, angle: 35 deg}")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            msg.contains("flank_angle") && msg.contains("overlap"),
+            "{msg}"
+        );
     }
 
     /// l_adh = L is allowed (SPEC §2: l_adh ≤ L).

@@ -76,6 +76,13 @@ pub struct MeshReport {
     pub symmetry_nodes_x: usize,
     #[serde(default)]
     pub symmetry_nodes_y: usize,
+    /// The 3D algorithm that made the mesh, and why it is not the one the
+    /// spec asked for (gmsh's HXT aborts on some rib designs; the mesh
+    /// stage then meshes with Delaunay).
+    #[serde(default)]
+    pub algorithm_3d: Option<crate::spec::Algorithm3d>,
+    #[serde(default)]
+    pub algorithm_fallback: Option<String>,
     pub timings_s: Timings,
 }
 

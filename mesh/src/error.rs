@@ -23,6 +23,17 @@ pub enum MeshError {
         status: String,
         output: String,
     },
+    /// gmsh ran and failed on entities that [`crate::explain_gmsh_failure`]
+    /// located on the specimen: each diagnosis names the entity, where it
+    /// is (which rib, which plane), what is wrong with it and what to change.
+    #[error("gmsh could not mesh {geo}:\n{list}\ngmsh said:\n{output}",
+            geo = .geo.display(),
+            list = .diagnoses.iter().map(|d| format!("  - {d}")).collect::<Vec<_>>().join("\n"))]
+    GmshFailedOn {
+        geo: PathBuf,
+        diagnoses: Vec<geom::diagnose::Diagnosis>,
+        output: String,
+    },
     /// gmsh did not finish in time and was killed.
     #[error("gmsh did not finish meshing {geo} within {seconds} s (mesh.timeout) and was killed", geo = .geo.display())]
     GmshTimeout { geo: PathBuf, seconds: f64 },

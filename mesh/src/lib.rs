@@ -57,6 +57,70 @@ impl Drop for TempFiles {
     }
 }
 
+/// Turns a gmsh failure on a specimen built by `geom` into one that names
+/// what gmsh could not mesh in the specimen's terms ([`MeshError::GmshFailedOn`]):
+/// the entities on gmsh's error lines are rebuilt from `geo` and measured,
+/// then located on the bar of `layout` (meshed at `h_interface`, m). Other
+/// errors, and failures that name no entity (or whose entities cannot be
+/// measured), are returned unchanged.
+pub fn explain_gmsh_failure(
+    gmsh: &Gmsh,
+    err: MeshError,
+    layout: &geom::layout::Layout,
+    h_interface: f64,
+) -> MeshError {
+    let MeshError::GmshFailed {
+        geo,
+        status,
+        output,
+    } = err
+    else {
+        return err;
+    };
+    let entities = geom::diagnose::entities_in_gmsh_output(&output);
+    let facts = match entities.is_empty() {
+        true => vec![],
+        false => geom::diagnose::query_entities(gmsh, &geo, &entities).unwrap_or_default(),
+    };
+    if facts.is_empty() {
+        return MeshError::GmshFailed {
+            geo,
+            status,
+            output,
+        };
+    }
+    MeshError::GmshFailedOn {
+        geo,
+        diagnoses: geom::diagnose::diagnose(layout, &facts, h_interface),
+        output,
+    }
+}
+
+/// [`mesh_specimen`] for the specimen `geom` built from `bar` and
+/// `specimen`: a gmsh failure is explained in the specimen's terms
+/// ([`explain_gmsh_failure`]).
+pub fn mesh_built_specimen(
+    gmsh: &Gmsh,
+    geo: &Path,
+    spec: &MeshSpec,
+    bar: &geom::spec::Bar,
+    specimen: &geom::spec::Specimen,
+    out_dir: &Path,
+) -> Result<MeshReport, MeshError> {
+    mesh_specimen(
+        gmsh,
+        geo,
+        spec,
+        bar.diameter,
+        specimen.adhesive_length,
+        out_dir,
+    )
+    .map_err(|e| {
+        let layout = geom::layout::Layout::new(bar, specimen);
+        explain_gmsh_failure(gmsh, e, &layout, spec.h_interface)
+    })
+}
+
 /// The mesh stage: meshes `geo` with gmsh under `spec`, reads and builds the
 /// model (bar diameter and adhesive length in m), and writes
 /// `specimen.msh`, `model.bin`, `mesh.vtu` and `mesh.json` into `out_dir`.
@@ -85,7 +149,30 @@ pub fn mesh_specimen(
             .collect(),
     );
 
-    let timing = run_gmsh(gmsh, geo, spec, &tmp_msh)?;
+    let (timing, used, fallback) = match run_gmsh(gmsh, geo, spec, &tmp_msh) {
+        // gmsh 4.15.2's HXT aborts ("double free or corruption") in the
+        // boundary recovery of some rib designs after inserting Steiner
+        // points (35° ribs; docs/mesh.md), where Delaunay meshes them.
+        Err(MeshError::GmshFailed { status, output, .. })
+            if spec.algorithm_3d == spec::Algorithm3d::Hxt =>
+        {
+            let delaunay = MeshSpec {
+                algorithm_3d: spec::Algorithm3d::Delaunay,
+                ..spec.clone()
+            };
+            let timing = run_gmsh(gmsh, geo, &delaunay, &tmp_msh)?;
+            let said = output
+                .lines()
+                .rev()
+                .find(|l| !l.trim().is_empty() && !l.starts_with("Info"))
+                .unwrap_or("")
+                .trim()
+                .to_string();
+            let why = format!("hxt failed ({status}: {said}); meshed with delaunay");
+            (timing, spec::Algorithm3d::Delaunay, Some(why))
+        }
+        other => (other?, spec.algorithm_3d, None),
+    };
     let t = Instant::now();
     let mut raw = read_msh(&tmp_msh)?;
     raw.source = finals[0].clone();
@@ -106,6 +193,8 @@ pub fn mesh_specimen(
     model.save(&temps.0[1])?;
     write(&temps.0[2], &vtu::model_vtu(&model))?;
     report.gmsh_version = gmsh_version;
+    report.algorithm_3d = Some(used);
+    report.algorithm_fallback = fallback;
     report.timings_s = Timings {
         gmsh: timing.seconds,
         read: t_read,

@@ -7,12 +7,12 @@ use std::path::Path;
 
 pub fn run(ctx: &Ctx, out: &Path) -> Result<()> {
     let geo = ctx.done_dir(Stage::Geometry).join("specimen.geo");
-    let report = mesh::mesh_specimen(
+    let report = mesh::mesh_built_specimen(
         ctx.gmsh,
         &geo,
         &ctx.scene.mesh,
-        ctx.scene.bar.diameter,
-        ctx.scene.specimen.adhesive_length,
+        &ctx.scene.bar,
+        &ctx.scene.specimen,
         out,
     )?;
     ctx.printer.detail(&format!(
