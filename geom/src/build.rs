@@ -235,8 +235,62 @@ pub fn build_geometry(
     let m = analytic(&layout);
     let tess = tessellated(&layout, &[(0.0, layout.l_adh), (layout.l_adh, layout.l)]);
 
+    let (measured, build_seconds) = measure(gmsh, &layout, &geo_path, out_dir)?;
+    // OCC measures the modelled part; the checks compare whole-specimen values.
+    let fraction = specimen.symmetry.fraction();
+    let group_mass = |name: &str| measured.groups.get(name).map_or(0.0, |g| g.mass) / fraction;
+    let group_entities = group_counts(&measured, &layout, specimen.symmetry, &geo_path)?;
+    let checks = three_way_checks(&layout, &m, &tess, &group_mass);
+    for (name, c) in &checks {
+        if !c.agree {
+            return Err(GeomError::Disagree {
+                quantity: name.clone(),
+                analytic: c.analytic,
+                parry3d: c.parry3d,
+                gmsh_occ: c.gmsh_occ,
+                pct: 100.0 * c.max_rel_diff,
+            });
+        }
+    }
+    let report = GeometryReport {
+        symmetry: specimen.symmetry,
+        modelled_fraction: fraction,
+        f_r: m.f_r,
+        rib_volume_m3: m.rib_volume_m3,
+        bar_volume_m3: m.bar_volume_m3,
+        interface_area_adhesive_m2: m.interface_area_adhesive_m2,
+        interface_area_free_m2: m.interface_area_free_m2,
+        rib_count: m.rib_count,
+        checks,
+        plane_clearance_m: layout.ribs.as_ref().map(|r| r.clearance_cube),
+        end_clearance_m: layout.ribs.as_ref().map(|r| r.clearance_ends),
+        group_entities,
+        periodic_face_gap: measured.periodic_gap,
+        tessellation_triangles: tess.triangles,
+        gmsh_version: gmsh.version().to_string(),
+        gmsh_build_seconds: build_seconds,
+        bar: bar.clone(),
+        specimen: specimen.clone(),
+    };
+    let json = serde_json::to_vec_pretty(&report).map_err(|e| GeomError::Measure {
+        problem: e.to_string(),
+        text: String::new(),
+    })?;
+    write_atomic(&json_path, &json)?;
+    Ok(report)
+}
+
+/// Has gmsh build the `.geo` and measure its physical groups, free
+/// entities and periodic faces; returns the measurements and the build's
+/// wall time (s).
+fn measure(
+    gmsh: &Gmsh,
+    layout: &Layout,
+    geo_path: &Path,
+    out_dir: &Path,
+) -> Result<(Measured, f64), GeomError> {
     let measure_out = out_dir.join(format!(".occ-measure-{}.json", std::process::id()));
-    let model_per_m = crate::geo::model_units_per_m(&layout).to_string();
+    let model_per_m = crate::geo::model_units_per_m(layout).to_string();
     let script = format!("{}{MEASURE_PY}", crate::diagnose::PARAMETRIC_GAP_PY);
     let run = gmsh.run_python(
         &script,
@@ -253,7 +307,7 @@ pub fn build_geometry(
         Err(GmshError::Failed { stderr, .. }) => {
             let _ = std::fs::remove_file(&measure_out);
             return Err(GeomError::Build {
-                path: geo_path,
+                path: geo_path.to_path_buf(),
                 message: stderr,
             });
         }
@@ -270,15 +324,23 @@ pub fn build_geometry(
     })?;
     if !measured.errors.is_empty() {
         return Err(GeomError::Build {
-            path: geo_path,
+            path: geo_path.to_path_buf(),
             message: measured.errors.join("\n"),
         });
     }
-    // OCC measures the modelled part; the checks compare whole-specimen values.
-    let fraction = specimen.symmetry.fraction();
-    let group_mass = |name: &str| measured.groups.get(name).map_or(0.0, |g| g.mass) / fraction;
+    Ok((measured, run.elapsed.as_secs_f64()))
+}
+
+/// Entities per physical group; an empty group (other than a free zone the
+/// specimen does not have) or a leftover curve or surface is an error.
+fn group_counts(
+    measured: &Measured,
+    layout: &Layout,
+    symmetry: Symmetry,
+    geo_path: &Path,
+) -> Result<BTreeMap<String, usize>, GeomError> {
     let mut group_entities = BTreeMap::new();
-    let mirror_groups: &[&str] = match specimen.symmetry {
+    let mirror_groups: &[&str] = match symmetry {
         Symmetry::Full => &[],
         Symmetry::Quarter => &[groups::SYMMETRY_X, groups::SYMMETRY_Y],
     };
@@ -312,6 +374,17 @@ pub fn build_geometry(
         });
     }
 
+    Ok(group_entities)
+}
+
+/// The bar volume, rib volume and interface areas three ways: analytic,
+/// the parry3d tessellation, gmsh's OCC model (`group_mass`, whole specimen).
+fn three_way_checks(
+    layout: &Layout,
+    m: &crate::metrics::Metrics,
+    tess: &crate::metrics::Tessellated,
+    group_mass: &dyn Fn(&str) -> f64,
+) -> BTreeMap<String, Check> {
     let core = std::f64::consts::PI * layout.r * layout.r * (layout.z_hi - layout.z_lo);
     let steel = group_mass(groups::STEEL);
     let mut checks = BTreeMap::new();
@@ -343,41 +416,5 @@ pub fn build_geometry(
             ),
         );
     }
-    for (name, c) in &checks {
-        if !c.agree {
-            return Err(GeomError::Disagree {
-                quantity: name.clone(),
-                analytic: c.analytic,
-                parry3d: c.parry3d,
-                gmsh_occ: c.gmsh_occ,
-                pct: 100.0 * c.max_rel_diff,
-            });
-        }
-    }
-    let report = GeometryReport {
-        symmetry: specimen.symmetry,
-        modelled_fraction: fraction,
-        f_r: m.f_r,
-        rib_volume_m3: m.rib_volume_m3,
-        bar_volume_m3: m.bar_volume_m3,
-        interface_area_adhesive_m2: m.interface_area_adhesive_m2,
-        interface_area_free_m2: m.interface_area_free_m2,
-        rib_count: m.rib_count,
-        checks,
-        plane_clearance_m: layout.ribs.as_ref().map(|r| r.clearance_cube),
-        end_clearance_m: layout.ribs.as_ref().map(|r| r.clearance_ends),
-        group_entities,
-        periodic_face_gap: measured.periodic_gap,
-        tessellation_triangles: tess.triangles,
-        gmsh_version: gmsh.version().to_string(),
-        gmsh_build_seconds: run.elapsed.as_secs_f64(),
-        bar: bar.clone(),
-        specimen: specimen.clone(),
-    };
-    let json = serde_json::to_vec_pretty(&report).map_err(|e| GeomError::Measure {
-        problem: e.to_string(),
-        text: String::new(),
-    })?;
-    write_atomic(&json_path, &json)?;
-    Ok(report)
+    checks
 }

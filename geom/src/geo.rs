@@ -172,24 +172,33 @@ impl RibRoot {
     }
 }
 
-/// Writes the `.geo` text for `layout`.
+/// Writes the `.geo` text for `layout`: parameters, the bar, the cube and
+/// its fragments, the physical groups, the size field.
 pub fn write_geo(layout: &Layout) -> String {
+    let mut g = String::new();
+    geo_parameters(&mut g, layout);
+    geo_bar(&mut g, layout);
+    geo_cube(&mut g, layout);
+    geo_groups(&mut g, layout);
+    geo_size_field(&mut g);
+    g
+}
+
+/// Units, mesh-size parameters and the specimen's dimensions.
+fn geo_parameters(w: &mut String, layout: &Layout) {
     let upm = model_units_per_m(layout);
     let length = |v: f64| num(v * upm);
-    let mut g = String::new();
-    let w = &mut g;
     let l = layout.l;
     let r_out = layout.outer_radius();
-    let has_cut = layout.l_adh < layout.l;
-    let quarter = layout.symmetry == Symmetry::Quarter;
     let _ = writeln!(
         w,
         "// Pull-out specimen: bar along z in a concrete cube (SPEC §2 frame).\n\
          // Cube x, y in [-L/2, L/2], z in [0, L]; z = 0 free face, z = L loaded (bearing) face.\n\
          SetFactory(\"OpenCASCADE\");\n\
          \n\
-         // Model units: mm (OpenCASCADE's absolute tolerances and gmsh's parametric ones\n\
-         // suit millimetre-sized features); the saved mesh is scaled to metres.\n\
+         // Model units per metre: 1000 for a ribbed bar (OpenCASCADE's absolute and\n\
+         // gmsh's parametric tolerances suit millimetre-sized ribs), 1 for a smooth one;\n\
+         // the saved mesh is scaled to metres.\n\
          model_per_m = {upm};\n\
          Mesh.ScalingFactor = 1 / model_per_m;\n\
          \n\
@@ -216,6 +225,13 @@ pub fn write_geo(layout: &Layout) -> String {
         rout = length(r_out),
         tol = length(1e-6 * l),
     );
+}
+
+/// The bar: the core cylinder, and for a ribbed bar the longitudinal and
+/// transverse ribs fused to it.
+fn geo_bar(w: &mut String, layout: &Layout) {
+    let upm = model_units_per_m(layout);
+    let length = |v: f64| num(v * upm);
     let _ = writeln!(
         w,
         "\n// Core: cylinder of radius R over the whole bar length.\n\
@@ -306,6 +322,13 @@ pub fn write_geo(layout: &Layout) -> String {
             );
         }
     }
+}
+
+/// The quarter's cut of the bar, the cube and the fragments that make the
+/// steel–concrete interface conformal.
+fn geo_cube(w: &mut String, layout: &Layout) {
+    let has_cut = layout.l_adh < layout.l;
+    let quarter = layout.symmetry == Symmetry::Quarter;
     if quarter {
         let _ = writeln!(
             w,
@@ -351,6 +374,12 @@ pub fn write_geo(layout: &Layout) -> String {
             "BooleanFragments{{ Volume{{bar(), cube}}; Delete; }}{{ }}"
         );
     }
+}
+
+/// The selections of volumes and faces, and the physical groups the mesh
+/// stage reads.
+fn geo_groups(w: &mut String, layout: &Layout) {
+    let quarter = layout.symmetry == Symmetry::Quarter;
     let _ = writeln!(
         w,
         "\n// Steel: the volumes inside the bar's box; concrete: all the others.\n\
@@ -424,6 +453,10 @@ pub fn write_geo(layout: &Layout) -> String {
             sy = groups::SYMMETRY_Y,
         );
     }
+}
+
+/// The size field (SPEC §9).
+fn geo_size_field(w: &mut String) {
     let _ = writeln!(
         w,
         "\n// Size field (SPEC §9): h(r) = min(h_outer, h_interface + k max(0, r - r_out)),\n\
@@ -440,5 +473,4 @@ pub fn write_geo(layout: &Layout) -> String {
          Mesh.MeshSizeFromCurvature = 0;\n\
          Mesh.MeshSizeExtendFromBoundary = 0;"
     );
-    g
 }

@@ -466,6 +466,35 @@ fn resolve_ribs(raw: RawRibs, raw_l: RawLongitudinalRibs, d: f64) -> Result<Ribs
         defaults::RIB_TOP_WIDTH_PER_D * d,
     )?;
     positive("bar.ribs.top_width", b_top)?;
+    let b_base = rib_base_width(&raw, a, c, beta, b_top)?;
+    let phase = len(&raw.phase, "bar.ribs.phase", 0.0)?;
+    bound(
+        "bar.ribs.phase",
+        phase,
+        Dim::Length,
+        (0.0..c).contains(&phase),
+        format!("in [0, bar.ribs.spacing = {})", mm(c)),
+    )?;
+
+    let longitudinal = resolve_longitudinal_ribs(&raw_l, r, a, b_top)?;
+    Ok(Ribs {
+        transverse: TransverseRibs {
+            height: a,
+            spacing: c,
+            angle: beta,
+            top_width: b_top,
+            base_width: b_base,
+            side_b: raw.side_b.unwrap_or_default(),
+            phase,
+        },
+        longitudinal,
+    })
+}
+
+/// The transverse ribs' base width (from `base_width` or `flank_angle`),
+/// checked against the crest (`b_top`) and the neighbouring ribs (spacing
+/// `c`, angle `beta`), m.
+fn rib_base_width(raw: &RawRibs, a: f64, c: f64, beta: f64, b_top: f64) -> Result<f64, SpecError> {
     let b_base = match (&raw.base_width, &raw.flank_angle) {
         (Some(_), Some(_)) => {
             return Err(SpecError::Inconsistent {
@@ -521,15 +550,17 @@ fn resolve_ribs(raw: RawRibs, raw_l: RawLongitudinalRibs, d: f64) -> Result<Ribs
             beta.to_degrees()
         ),
     )?;
-    let phase = len(&raw.phase, "bar.ribs.phase", 0.0)?;
-    bound(
-        "bar.ribs.phase",
-        phase,
-        Dim::Length,
-        (0.0..c).contains(&phase),
-        format!("in [0, bar.ribs.spacing = {})", mm(c)),
-    )?;
+    Ok(b_base)
+}
 
+/// `bar.longitudinal_ribs` on a core of radius `r` whose transverse ribs
+/// are `a` high with crests `b_top` wide (the defaults follow them).
+fn resolve_longitudinal_ribs(
+    raw_l: &RawLongitudinalRibs,
+    r: f64,
+    a: f64,
+    b_top: f64,
+) -> Result<LongitudinalRibs, SpecError> {
     let a_l = len(&raw_l.height, "bar.longitudinal_ribs.height", a)?;
     positive("bar.longitudinal_ribs.height", a_l)?;
     bound(
@@ -571,21 +602,10 @@ fn resolve_ribs(raw: RawRibs, raw_l: RawLongitudinalRibs, d: f64) -> Result<Ribs
         bl_base <= r,
         format!("<= d/2 = {} (leaves room for the transverse ribs)", mm(r)),
     )?;
-    Ok(Ribs {
-        transverse: TransverseRibs {
-            height: a,
-            spacing: c,
-            angle: beta,
-            top_width: b_top,
-            base_width: b_base,
-            side_b: raw.side_b.unwrap_or_default(),
-            phase,
-        },
-        longitudinal: LongitudinalRibs {
-            height: a_l,
-            top_width: bl_top,
-            base_width: bl_base,
-        },
+    Ok(LongitudinalRibs {
+        height: a_l,
+        top_width: bl_top,
+        base_width: bl_base,
     })
 }
 
