@@ -19,5 +19,7 @@ if ! .tools/snakemake-venv/bin/snakemake --version >/dev/null 2>&1; then
   .tools/snakemake-venv/bin/pip install -q --disable-pip-version-check "snakemake==9.27.1"
 fi
 cargo fmt --all --check
+# Structure rules of the library crates (docs/architecture.md).
+python3 scripts/check-structure.py
 cargo clippy --workspace --all-targets --quiet -- -D warnings
 cargo test --workspace
