@@ -33,17 +33,6 @@ pub enum SideB {
     Mirrored,
 }
 
-/// What the interface of the non-adhesive zone z ∈ [l_adh, L] does.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
-#[serde(rename_all = "lowercase")]
-pub enum NonAdhesive {
-    /// Duplicated nodes and no interface element: no interaction at all.
-    #[default]
-    Free,
-    /// No-tension, frictionless contact interface.
-    Contact,
-}
-
 /// `specimen.symmetry` as written: which part of the specimen is modelled.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "lowercase")]
@@ -123,7 +112,6 @@ pub struct RawSpecimen {
     pub adhesive_length: Option<RawQuantity>,
     pub free_overhang: Option<RawQuantity>,
     pub loaded_overhang: Option<RawQuantity>,
-    pub non_adhesive: Option<NonAdhesive>,
     pub symmetry: Option<RawSymmetry>,
 }
 
@@ -188,7 +176,6 @@ pub struct Specimen {
     pub free_overhang: f64,
     /// Bar length e_load beyond the loaded face z = L, m.
     pub loaded_overhang: f64,
-    pub non_adhesive: NonAdhesive,
     /// The modelled part (whole specimen or the quarter x ≥ 0, y ≥ 0).
     pub symmetry: Symmetry,
 }
@@ -419,7 +406,6 @@ pub fn resolve(bar: &RawBar, specimen: &RawSpecimen) -> Result<(Bar, Specimen), 
             adhesive_length: l_adh,
             free_overhang: e_free,
             loaded_overhang: e_load,
-            non_adhesive: specimen.non_adhesive.unwrap_or_default(),
             symmetry,
         },
     ))
@@ -628,7 +614,6 @@ mod tests {
     fn defaults_follow_the_spec() {
         let (bar, sp) = try_resolve("{kind: ribbed, diameter: 16 mm}", "{}").unwrap();
         assert!((sp.cube_side - 0.16).abs() < 1e-15 && (sp.adhesive_length - 0.08).abs() < 1e-15);
-        assert_eq!(sp.non_adhesive, NonAdhesive::Free);
         let t = bar.ribs.unwrap().transverse;
         assert!((t.height - 1.04e-3).abs() < 1e-15 && (t.angle - 55f64.to_radians()).abs() < 1e-15);
         assert_eq!(t.side_b, SideB::Rotated);

@@ -6,7 +6,7 @@ use crate::overrides::Override;
 use geom::spec::{Bar, RawBar, RawSpecimen, Specimen};
 use mesh::spec::{MeshSpec, RawMeshSpec};
 use serde::{Deserialize, Serialize};
-use solve::spec::materials::{Materials, RawMaterials};
+use solve::spec::materials::{Materials, NonAdhesive, RawMaterials};
 use solve::spec::solver::{Loading, RawLoading, RawSolver, SolverSettings};
 use std::path::{Path, PathBuf};
 
@@ -28,6 +28,21 @@ pub struct RawScene {
     pub solver: RawSolver,
     #[serde(default)]
     pub outputs: RawOutputs,
+    /// `specimen.non_adhesive`, taken out of the `specimen` section before
+    /// geom reads it: the solve stage reads it (which law the free zone
+    /// gets), the geometry does not depend on it.
+    #[serde(skip)]
+    pub non_adhesive: Option<NonAdhesive>,
+}
+
+/// The specimen section: its geometry (geom's) and the interface the solve
+/// puts on its non-adhesive zone (solve's). Serialised as one `specimen`
+/// object, as written.
+#[derive(Debug, Clone, Serialize)]
+pub struct SpecimenSection {
+    #[serde(flatten)]
+    pub geometry: Specimen,
+    pub non_adhesive: NonAdhesive,
 }
 
 /// The resolved scene: every value in SI, defaults filled in, bounds checked.
@@ -35,7 +50,7 @@ pub struct RawScene {
 pub struct Scene {
     pub name: String,
     pub bar: Bar,
-    pub specimen: Specimen,
+    pub specimen: SpecimenSection,
     pub mesh: MeshSpec,
     pub materials: Materials,
     pub loading: Loading,
@@ -105,6 +120,22 @@ fn check_name(name: &str) -> Result<(), String> {
     }
 }
 
+/// Removes `specimen.non_adhesive` from the spec tree and reads it.
+fn take_non_adhesive(tree: &mut serde_yaml::Value) -> Result<Option<NonAdhesive>, String> {
+    let Some(specimen) = tree
+        .get_mut("specimen")
+        .and_then(serde_yaml::Value::as_mapping_mut)
+    else {
+        return Ok(None);
+    };
+    match specimen.remove("non_adhesive") {
+        None => Ok(None),
+        Some(v) => serde_yaml::from_value(v)
+            .map(Some)
+            .map_err(|e| format!("specimen.non_adhesive: {e}")),
+    }
+}
+
 impl Scene {
     /// Reads `path`, applies `overrides` (`key.path=value`), resolves.
     pub fn load(path: &Path, overrides: &[String]) -> Result<Scene, SceneError> {
@@ -130,7 +161,12 @@ impl Scene {
                 })?;
         }
         let written = serde_json::to_value(&tree).unwrap_or(serde_json::Value::Null);
-        let raw: RawScene = serde_yaml::from_value(tree).map_err(yaml_err)?;
+        let non_adhesive = take_non_adhesive(&mut tree).map_err(|message| SceneError::Yaml {
+            path: path.to_path_buf(),
+            message,
+        })?;
+        let mut raw: RawScene = serde_yaml::from_value(tree).map_err(yaml_err)?;
+        raw.non_adhesive = non_adhesive;
         let mut scene = raw.resolve().map_err(|source| SceneError::Invalid {
             path: path.to_path_buf(),
             source,
@@ -143,11 +179,14 @@ impl Scene {
 impl RawScene {
     pub fn resolve(&self) -> Result<Scene, SectionError> {
         check_name(&self.name).map_err(SectionError::Name)?;
-        let (bar, specimen) = geom::spec::resolve(&self.bar, &self.specimen)?;
+        let (bar, geometry) = geom::spec::resolve(&self.bar, &self.specimen)?;
         Ok(Scene {
             name: self.name.clone(),
             bar,
-            specimen,
+            specimen: SpecimenSection {
+                geometry,
+                non_adhesive: self.non_adhesive.unwrap_or_default(),
+            },
             mesh: self.mesh.resolve()?,
             materials: self.materials.resolve()?,
             loading: self.loading.resolve()?,
@@ -155,5 +194,36 @@ impl RawScene {
             outputs: self.outputs.resolve()?,
             written: serde_json::Value::Null,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const SCENE: &str = "name: s\nbar: {kind: smooth, diameter: 8 mm}\n";
+
+    /// `specimen.non_adhesive` is read for the solve, not by geom: it
+    /// resolves into the scene's specimen section, appears in the resolved
+    /// specimen object where it was written (the solve key's pointer), and
+    /// a bad value names the key.
+    #[test]
+    fn non_adhesive_is_read_beside_the_geometry() {
+        let path = Path::new("s.yaml");
+        let scene =
+            Scene::from_yaml(SCENE, path, &["specimen.non_adhesive=contact".into()]).unwrap();
+        assert_eq!(scene.specimen.non_adhesive, NonAdhesive::Contact);
+        let json = serde_json::to_value(&scene).unwrap();
+        assert_eq!(json.pointer("/specimen/non_adhesive").unwrap(), "contact");
+        assert!(json.pointer("/specimen/cube_side").is_some());
+        let default = Scene::from_yaml(SCENE, path, &[]).unwrap();
+        assert_eq!(default.specimen.non_adhesive, NonAdhesive::Free);
+        let err = Scene::from_yaml(SCENE, path, &["specimen.non_adhesive=glued".into()])
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("specimen.non_adhesive") && err.contains("glued"),
+            "{err}"
+        );
     }
 }

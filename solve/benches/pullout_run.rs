@@ -14,10 +14,10 @@
 //! every converged step, every cut-back, and the summary with the phase
 //! times.
 
-use geom::spec::NonAdhesive;
 use mesh::Model;
 use solve::nonlinear::{Checkpoint, CommittedView, Cutback, Observer, SolveError, StepReport};
 use solve::problems::pullout::solve_pullout;
+use solve::spec::materials::NonAdhesive;
 use solve::spec::materials::RawMaterials;
 use solve::spec::solver::{RawLoading, RawSolver};
 

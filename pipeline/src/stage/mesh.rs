@@ -12,7 +12,7 @@ pub fn run(ctx: &Ctx, out: &Path) -> Result<()> {
         &geo,
         &ctx.scene.mesh,
         &ctx.scene.bar,
-        &ctx.scene.specimen,
+        &ctx.scene.specimen.geometry,
         out,
     )?;
     ctx.printer.detail(&format!(

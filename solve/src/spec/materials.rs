@@ -25,7 +25,6 @@ use crate::laws::mazars::{
 };
 use crate::laws::tvergaard::Tvergaard;
 use crate::laws::{AnyBulkLaw, AnyInterfaceLaw};
-use geom::spec::NonAdhesive;
 use geom::units::{Dim, RawQuantity, UnitError};
 use mesh::Model;
 use serde::{Deserialize, Serialize};
@@ -200,6 +199,19 @@ pub struct Materials {
     pub concrete: ConcreteModel,
     pub steel: SteelModel,
     pub interface: InterfaceModel,
+}
+
+/// What the interface of the non-adhesive zone z ∈ [l_adh, L] does
+/// (`specimen.non_adhesive`: the geometry is the same either way, only the
+/// law the solver puts there differs).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum NonAdhesive {
+    /// Duplicated nodes and no interface element: no interaction at all.
+    #[default]
+    Free,
+    /// No-tension, frictionless contact interface.
+    Contact,
 }
 
 /// A concrete tet whose size the concrete law cannot be regularised for.
