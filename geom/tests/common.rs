@@ -18,7 +18,13 @@ pub fn load_spec(name: &str) -> (Bar, Specimen) {
     let text = std::fs::read_to_string(&path).unwrap();
     let doc: serde_yaml::Value = serde_yaml::from_str(&text).unwrap();
     let bar: RawBar = serde_yaml::from_value(doc["bar"].clone()).unwrap();
-    let specimen: RawSpecimen = serde_yaml::from_value(doc["specimen"].clone()).unwrap();
+    // `specimen.non_adhesive` is the solve's (the scene takes it out before
+    // geom reads the section).
+    let mut specimen = doc["specimen"].clone();
+    if let Some(map) = specimen.as_mapping_mut() {
+        map.remove("non_adhesive");
+    }
+    let specimen: RawSpecimen = serde_yaml::from_value(specimen).unwrap();
     resolve(&bar, &specimen).unwrap()
 }
 
