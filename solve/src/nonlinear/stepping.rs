@@ -67,7 +67,7 @@ const PLATEAU: f64 = 1e-3;
 const UNLOADED: f64 = 1e-3;
 /// A dissipation-controlled attempt whose last iterate puts λ below this
 /// share of the last converged λ has found the path snapping back towards
-/// the origin (see [`Stepper::brittle_failure`]).
+/// the origin (see [`Driver::brittle_failure`]).
 const SNAP_BACK: f64 = 0.5;
 /// ... and concrete damage growing in at least this share of the
 /// concrete tets in that iterate: a failure spreading through the cube.
