@@ -1,6 +1,7 @@
 //! The `ribbar` pipeline: CLI types, scene specs and overrides, the
 //! content-addressed store, the four stages, studies and post-processing.
 
+pub mod app;
 pub mod bench;
 pub mod bench_series;
 pub mod cli;

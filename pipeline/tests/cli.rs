@@ -107,6 +107,39 @@ fn run_writes_every_artifact() {
     assert!(
         vtu.contains("<VTKFile") && vtu.contains("Name=\"D\"") && vtu.contains("principal_stress")
     );
+    // The ParaView collection: every written step once, in loading order,
+    // each with its bulk and interface parts, and each file present.
+    let pvd = read(&scene.join("fields/fields.pvd"));
+    let datasets: Vec<(f64, String)> = pvd
+        .lines()
+        .filter(|l| l.contains("<DataSet"))
+        .map(|l| {
+            let attr = |name: &str| {
+                let start = l.find(&format!("{name}=\"")).unwrap() + name.len() + 2;
+                l[start..start + l[start..].find('"').unwrap()].to_string()
+            };
+            (attr("timestep").parse().unwrap(), attr("file"))
+        })
+        .collect();
+    let files: Vec<&str> = datasets.iter().map(|(_, f)| f.as_str()).collect();
+    assert_eq!(
+        files,
+        [
+            "step0002_bulk.vtu",
+            "step0002_interface.vtu",
+            "peak_bulk.vtu",
+            "peak_interface.vtu",
+            "end_bulk.vtu",
+            "end_interface.vtu"
+        ],
+        "{pvd}"
+    );
+    for (_, f) in &datasets {
+        assert!(scene.join("fields").join(f).is_file(), "{f}");
+    }
+    assert!(datasets.windows(3).all(|w| w[0].0 < w[2].0), "{pvd}");
+    let u_final = curve.lines().last().unwrap().split(',').nth(1).unwrap();
+    assert_eq!(datasets[5].0, u_final.parse::<f64>().unwrap(), "{pvd}");
     let png = std::fs::read(scene.join("plots/bond_slip.png")).unwrap();
     assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n");
     // Nothing half-written is left beside the published files.

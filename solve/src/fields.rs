@@ -344,3 +344,40 @@ pub fn write_profile_csv(rows: &[ProfileRow]) -> String {
     }
     out
 }
+
+/// One written field step of a ParaView collection: its loading parameter
+/// and the files holding it (bulk and interface, as separate parts).
+#[derive(Debug, Clone, PartialEq)]
+pub struct CollectionStep {
+    /// The collection's time value: the imposed displacement, m.
+    pub u_imposed: f64,
+    /// File names relative to the collection file.
+    pub files: Vec<String>,
+}
+
+/// A ParaView `.pvd` collection opening `steps` as one time series (each
+/// step's files as the parts of one multiblock); `steps` in loading order.
+pub fn collection_pvd(steps: &[CollectionStep]) -> String {
+    let mut out = String::from(
+        "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n<Collection>\n",
+    );
+    for step in steps {
+        for (part, file) in step.files.iter().enumerate() {
+            let _ = writeln!(
+                out,
+                "  <DataSet timestep=\"{:e}\" group=\"\" part=\"{part}\" file=\"{}\"/>",
+                step.u_imposed,
+                xml_escape(file)
+            );
+        }
+    }
+    out.push_str("</Collection>\n</VTKFile>\n");
+    out
+}
+
+fn xml_escape(s: &str) -> String {
+    s.replace('&', "&amp;")
+        .replace('"', "&quot;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+}

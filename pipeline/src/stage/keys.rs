@@ -15,7 +15,7 @@ impl Stage {
         match self {
             Stage::Geometry => 2,
             Stage::Mesh => 2,
-            Stage::Solve => 9,
+            Stage::Solve => 10,
             Stage::Post => 2,
         }
     }

@@ -229,6 +229,7 @@ pub fn run(ctx: &Ctx, out: &Path) -> Result<()> {
     if ctx.scene.outputs.fields.at_end {
         write_end_fields(&mut observer, &model, &laws, &result)?;
     }
+    write_collection(&observer.fields_dir, &result.rows, observer.peak)?;
     let profile = [observer.profile.as_slice(), &observer.peak_profile].concat();
     crate::store::write_atomic(
         &out.join("interface_profile.csv"),
@@ -369,6 +370,56 @@ fn write_end_fields(
         };
         observer.write_fields("end", &report, &view)?;
     }
+    Ok(())
+}
+
+/// `fields/fields.pvd`: every written field step as one ParaView time
+/// series over the imposed displacement. The peak and end files join it
+/// under their own step unless a requested step already holds that state.
+fn write_collection(fields_dir: &Path, rows: &[solve::curve::CurveRow], peak: f64) -> Result<()> {
+    let Ok(entries) = std::fs::read_dir(fields_dir) else {
+        return Ok(());
+    };
+    let mut names: Vec<String> = entries
+        .filter_map(|e| e.ok()?.file_name().into_string().ok())
+        .filter_map(|n| n.strip_suffix("_bulk.vtu").map(str::to_string))
+        .collect();
+    // Requested steps first, so that they win over peak/end at the same step.
+    names.sort_by_key(|n| (!n.starts_with("step"), n.clone()));
+    let step_of = |name: &str| -> Option<usize> {
+        match name {
+            "peak" => rows.iter().find(|r| r.bond_stress == peak).map(|r| r.step),
+            "end" => rows.last().map(|r| r.step),
+            _ => name.strip_prefix("step")?.parse().ok(),
+        }
+    };
+    let mut steps: Vec<(usize, solve::fields::CollectionStep)> = Vec::new();
+    for name in names {
+        let Some(step) = step_of(&name) else { continue };
+        let Some(row) = rows.iter().find(|r| r.step == step) else {
+            continue;
+        };
+        if steps.iter().any(|(s, _)| *s == step) {
+            continue;
+        }
+        let mut files = vec![format!("{name}_bulk.vtu")];
+        if fields_dir.join(format!("{name}_interface.vtu")).is_file() {
+            files.push(format!("{name}_interface.vtu"));
+        }
+        steps.push((
+            step,
+            solve::fields::CollectionStep {
+                u_imposed: row.u_imposed,
+                files,
+            },
+        ));
+    }
+    steps.sort_by_key(|(s, _)| *s);
+    let steps: Vec<_> = steps.into_iter().map(|(_, c)| c).collect();
+    crate::store::write_atomic(
+        &fields_dir.join("fields.pvd"),
+        solve::fields::collection_pvd(&steps).as_bytes(),
+    )?;
     Ok(())
 }
 

@@ -1,0 +1,120 @@
+//! The `ribbar` command line as a function: the binary and the Python
+//! package's entry point both run it. Library crates return typed errors;
+//! here they are reported with their chain and a non-zero exit.
+
+use crate::cli::{Cli, Command, SceneArgs};
+use crate::progress::{Printer, Verbosity};
+use crate::scene::Scene;
+use crate::stage::{self, Keys, Stage, StageStatus};
+use crate::store::Store;
+use anyhow::{Context, Result};
+use clap::Parser;
+use std::ffi::OsString;
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+/// Environment variable naming the program that study cases and benchmark
+/// runs start as child processes. Unset, it is this executable; the Python
+/// package sets it, since there this process is the Python interpreter.
+pub const SELF_EXE_ENV: &str = "RIBBAR_EXE";
+
+/// The `ribbar` program to start child processes with.
+pub fn self_exe() -> Result<PathBuf> {
+    match std::env::var_os(SELF_EXE_ENV).filter(|v| !v.is_empty()) {
+        Some(exe) => Ok(PathBuf::from(exe)),
+        None => std::env::current_exe().context("locating the ribbar executable"),
+    }
+}
+
+/// Runs the command line `args` (the program name first) and returns the
+/// process exit status: 0 on success, 1 on an error (reported on standard
+/// error with its chain), clap's own status for usage errors and `--help`.
+pub fn main_with_args<I, T>(args: I) -> u8
+where
+    I: IntoIterator<Item = T>,
+    T: Into<OsString> + Clone,
+{
+    let cli = match Cli::try_parse_from(args) {
+        Ok(cli) => cli,
+        Err(err) => {
+            let _ = err.print();
+            return u8::try_from(err.exit_code()).unwrap_or(2);
+        }
+    };
+    let verbosity = if cli.quiet {
+        Verbosity::Quiet
+    } else if cli.verbose {
+        Verbosity::Verbose
+    } else {
+        Verbosity::Normal
+    };
+    let printer = Printer::new(verbosity);
+    match dispatch(cli.command, &printer) {
+        Ok(code) if code == ExitCode::SUCCESS => 0,
+        Ok(_) => 1,
+        Err(err) => {
+            printer.finish();
+            eprintln!("error: {err}");
+            for cause in err.chain().skip(1) {
+                eprintln!("  caused by: {cause}");
+            }
+            1
+        }
+    }
+}
+
+fn dispatch(command: Command, printer: &Printer) -> Result<ExitCode> {
+    match command {
+        Command::Geometry(a) => run_stages(&a, Stage::Geometry.up_to(), printer),
+        Command::Mesh(a) => run_stages(&a, Stage::Mesh.up_to(), printer),
+        Command::Solve(a) => run_stages(&a, Stage::Solve.up_to(), printer),
+        Command::Post(a) | Command::Run(a) => run_stages(&a, &Stage::ALL, printer),
+        Command::Status(a) => status(&a),
+        Command::Clean(a) => crate::commands::clean(&a, printer),
+        Command::Material(a) => crate::commands::material(&a),
+        Command::Study(a) => crate::study_run::run(&a, printer),
+        Command::Bench(a) => crate::bench::run(&a, printer),
+    }
+}
+
+fn run_stages(args: &SceneArgs, stages: &[Stage], printer: &Printer) -> Result<ExitCode> {
+    let scene = Scene::load(&args.spec, &args.overrides)?;
+    crate::commands::run_scene(&scene, &args.work, stages, printer)?;
+    Ok(ExitCode::SUCCESS)
+}
+
+fn status(args: &SceneArgs) -> Result<ExitCode> {
+    let scene = Scene::load(&args.spec, &args.overrides)?;
+    let gmsh = geom::gmsh::Gmsh::locate().context("status needs gmsh's version for the keys")?;
+    let keys = Keys::of(&scene, gmsh.version());
+    let store = Store::new(&args.work);
+    let mut all_done = true;
+    for (stage, st) in stage::status(&store, &scene, &keys)? {
+        let text = match &st {
+            StageStatus::UpToDate => "up to date".to_string(),
+            StageStatus::Missing => "missing".to_string(),
+            StageStatus::Interrupted => "interrupted: `ribbar run` resumes it".to_string(),
+            StageStatus::Stale(changed) if changed.is_empty() => {
+                "stale (upstream changed)".to_string()
+            }
+            StageStatus::Stale(changed) => format!(
+                "stale: changed {}",
+                changed
+                    .iter()
+                    .map(|k| if Stage::from_name(k).is_some() {
+                        format!("{k} (upstream stage)")
+                    } else {
+                        k.clone()
+                    })
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+        };
+        all_done &= st == StageStatus::UpToDate;
+        println!("{:<9} {}", stage, text);
+    }
+    if all_done {
+        println!("every stage is up to date");
+    }
+    Ok(ExitCode::SUCCESS)
+}
