@@ -23,3 +23,18 @@ cargo fmt --all --check
 python3 scripts/check-structure.py
 cargo clippy --workspace --all-targets --quiet -- -D warnings
 cargo test --workspace
+# The Python package: its wheel (built with the test profile, whose
+# artifacts the tests above already compiled), installed with its
+# dependencies (the PyPI gmsh among them) into a fresh virtual environment,
+# then the API's tests end to end. `pip install .` builds the same wheel
+# with the release profile.
+if ! .tools/maturin-venv/bin/maturin --version >/dev/null 2>&1; then
+  rm -rf .tools/maturin-venv
+  python3 -m venv .tools/maturin-venv
+  .tools/maturin-venv/bin/pip install -q --disable-pip-version-check "maturin>=1.5,<2"
+fi
+rm -rf target/wheels-test .tools/python-test-venv
+.tools/maturin-venv/bin/maturin build --quiet --profile dev --out target/wheels-test
+python3 -m venv .tools/python-test-venv
+.tools/python-test-venv/bin/pip install -q --disable-pip-version-check target/wheels-test/ribbar-*.whl "pytest>=7"
+env -u GMSH .tools/python-test-venv/bin/python -m pytest -q python/tests

@@ -10,20 +10,24 @@ use crate::store::Store;
 use anyhow::{Context, Result};
 use clap::Parser;
 use std::ffi::OsString;
-use std::path::PathBuf;
 use std::process::ExitCode;
 
-/// Environment variable naming the program that study cases and benchmark
-/// runs start as child processes. Unset, it is this executable; the Python
-/// package sets it, since there this process is the Python interpreter.
-pub const SELF_EXE_ENV: &str = "RIBBAR_EXE";
-
-/// The `ribbar` program to start child processes with.
-pub fn self_exe() -> Result<PathBuf> {
-    match std::env::var_os(SELF_EXE_ENV).filter(|v| !v.is_empty()) {
-        Some(exe) => Ok(PathBuf::from(exe)),
-        None => std::env::current_exe().context("locating the ribbar executable"),
+/// An error as the command line reports it: `error: ` and the message,
+/// then one `  caused by: ` line per cause that the message above it does
+/// not already end with.
+pub fn error_report(err: &anyhow::Error) -> String {
+    let mut text = format!("error: {err}");
+    let mut previous = err.to_string();
+    for cause in err.chain().skip(1) {
+        let cause = cause.to_string();
+        // Errors that print their source as part of their own message
+        // (`{path}: {source}`) would otherwise say it twice.
+        if !previous.ends_with(&cause) {
+            text.push_str(&format!("\n  caused by: {cause}"));
+        }
+        previous = cause;
     }
+    text
 }
 
 /// Runs the command line `args` (the program name first) and returns the
@@ -54,10 +58,7 @@ where
         Ok(_) => 1,
         Err(err) => {
             printer.finish();
-            eprintln!("error: {err}");
-            for cause in err.chain().skip(1) {
-                eprintln!("  caused by: {cause}");
-            }
+            eprintln!("{}", error_report(&err));
             1
         }
     }

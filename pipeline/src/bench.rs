@@ -177,7 +177,7 @@ struct Row {
 }
 
 fn run_ribbar_child(job: &Job, printer: &Printer) -> Result<(ChildResult, Measured)> {
-    let exe = crate::app::self_exe()?;
+    let exe = crate::child::self_exe()?;
     let start = Instant::now();
     let mut child = Command::new(exe)
         .args(["bench", "linear"])

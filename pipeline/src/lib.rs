@@ -4,6 +4,7 @@
 pub mod app;
 pub mod bench;
 pub mod bench_series;
+pub mod child;
 pub mod cli;
 pub mod commands;
 pub mod outputs;

@@ -106,7 +106,7 @@ pub fn run(args: &StudyArgs, printer: &Printer) -> Result<ExitCode> {
         ));
         return Ok(ExitCode::SUCCESS);
     }
-    let exe = crate::app::self_exe()?;
+    let exe = crate::child::self_exe()?;
     let logs = out.join("logs");
     std::fs::create_dir_all(&logs).with_context(|| format!("creating {}", logs.display()))?;
     printer.line(&format!(
@@ -287,7 +287,7 @@ fn convergence(grids: &[(f64, serde_json::Value)], out: &Path) -> Result<()> {
 /// A Snakefile whose rules call the same stage subcommands on the same work
 /// layout: one rule per stage and case, then the study's own collection.
 pub fn snakefile(study: &Study, args: &StudyArgs) -> Result<String> {
-    let exe = crate::app::self_exe()?;
+    let exe = crate::child::self_exe()?;
     let q = |s: &str| format!("{s:?}");
     let mut text = String::new();
     text.push_str(&format!(
