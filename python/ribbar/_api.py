@@ -441,6 +441,9 @@ def _call(argv: List[str], progress: bool, verbose: bool) -> "tuple[int, str]":
         text=True,
         errors="replace",
         bufsize=1,
+        # Its own process group, so that an interrupt reaches a study's case
+        # processes too, and in Jupyter (where only the kernel gets SIGINT).
+        start_new_session=True,
     )
     try:
         assert child.stdout is not None
@@ -451,8 +454,7 @@ def _call(argv: List[str], progress: bool, verbose: bool) -> "tuple[int, str]":
                 sys.stderr.flush()
         code = child.wait()
     except KeyboardInterrupt:
-        # In a terminal the child had the signal too; in Jupyter only the
-        # kernel did. Either way the child ends, and its checkpoint stays.
+        # The child's group ends; a solve's checkpoint stays for the resume.
         _stop(child)
         sys.stderr.write(
             "ribbar: interrupted; run the same call again to resume from the last checkpoint\n"
@@ -462,13 +464,16 @@ def _call(argv: List[str], progress: bool, verbose: bool) -> "tuple[int, str]":
 
 
 def _stop(child: "subprocess.Popen[str]") -> None:
-    if child.poll() is None:
-        child.send_signal(signal.SIGINT)
+    for sig, wait in ((signal.SIGINT, 10), (signal.SIGKILL, None)):
         try:
-            child.wait(timeout=10)
+            os.killpg(child.pid, sig)
+        except ProcessLookupError:
+            return
+        try:
+            child.wait(timeout=wait)
+            return
         except subprocess.TimeoutExpired:
-            child.kill()
-            child.wait()
+            continue
 
 
 def _error_message(output: str, argv: List[str]) -> str:
