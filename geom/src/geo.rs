@@ -207,9 +207,9 @@ fn geo_parameters(w: &mut String, layout: &Layout) {
          Geometry.OCCBoundsUseStl = 1;\n\
          \n\
          // Mesh sizes (m, converted to model units in the size field). The mesh stage\n\
-         // passes -setnumber h_interface/h_outer; the defaults only make the script\n\
-         // usable on its own.\n\
-         DefineConstant[\n  h_interface = {{{hi}, Name \"Parameters/h_interface\"}},\n  h_outer = {{{ho}, Name \"Parameters/h_outer\"}}\n];\n\
+         // passes -setnumber h_interface/h_outer (and h_bar_core when the spec sets\n\
+         // it); the defaults only make the script usable on its own.\n\
+         DefineConstant[\n  h_interface = {{{hi}, Name \"Parameters/h_interface\"}},\n  h_outer = {{{ho}, Name \"Parameters/h_outer\"}},\n  h_bar_core = {{0, Name \"Parameters/h_bar_core\"}}\n];\n\
          \n\
          // Specimen dimensions (model units).\n\
          L = {L};\nl_adh = {ladh};\nz_lo = {zlo};\nz_hi = {zhi};\nR = {R};\nr_out = {rout};\n\
@@ -466,7 +466,17 @@ fn geo_size_field(w: &mut String) {
          h_out = h_outer * model_per_m;\n\
          k_grow = (h_out - h_in) / (L / 2 - r_out);\n\
          Field[1] = MathEval;\n\
-         Field[1].F = Sprintf(\"Min(%.12g, %.12g + %.12g * Max(0, Sqrt(x * x + y * y) - %.12g))\", h_out, h_in, k_grow, r_out);\n\
+         If (h_bar_core > h_interface)\n\
+           // A lean bar core: h_interface in a band of two rib heights (at least\n\
+           // two elements) under the bar's surface, then growing by half the\n\
+           // depth below the band up to h_bar_core: the core stays elastic and\n\
+           // its field smooth (docs/mesh.md, Bar core).\n\
+           h_core = h_bar_core * model_per_m;\n\
+           r_band = R - Max(2 * (r_out - R), 2 * h_in);\n\
+           Field[1].F = Sprintf(\"Min(%.12g, %.12g + %.12g * Max(0, Sqrt(x * x + y * y) - %.12g) + Min(%.12g, 0.5 * Max(0, %.12g - Sqrt(x * x + y * y))))\", h_out, h_in, k_grow, r_out, h_core - h_in, r_band);\n\
+         Else\n\
+           Field[1].F = Sprintf(\"Min(%.12g, %.12g + %.12g * Max(0, Sqrt(x * x + y * y) - %.12g))\", h_out, h_in, k_grow, r_out);\n\
+         EndIf\n\
          Background Field = 1;\n\
          // Only the field sets sizes.\n\
          Mesh.MeshSizeFromPoints = 0;\n\

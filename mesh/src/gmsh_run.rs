@@ -41,7 +41,7 @@ pub struct GmshTiming {
 /// The command-line arguments that mesh `geo` into `out_msh` with `spec`.
 /// Options go through `-string` (read before the `.geo`, so the `.geo` must
 /// not set them itself); sizes through `-setnumber` on the `.geo`'s
-/// `DefineConstant`s `h_interface` and `h_outer` (m).
+/// `DefineConstant`s `h_interface`, `h_outer` and, when set, `h_bar_core` (m).
 pub fn gmsh_args(geo: &Path, spec: &MeshSpec, out_msh: &Path) -> Vec<String> {
     let (opt, netgen) = match spec.optimize {
         Optimize::None => (0, 0),
@@ -55,7 +55,7 @@ pub fn gmsh_args(geo: &Path, spec: &MeshSpec, out_msh: &Path) -> Vec<String> {
         netgen,
         spec.threads
     );
-    vec![
+    let mut args = vec![
         geo.display().to_string(),
         "-3".into(),
         "-string".into(),
@@ -71,7 +71,18 @@ pub fn gmsh_args(geo: &Path, spec: &MeshSpec, out_msh: &Path) -> Vec<String> {
         "-bin".into(),
         "-o".into(),
         out_msh.display().to_string(),
-    ]
+    ];
+    if let Some(h) = spec.h_bar_core {
+        args.splice(
+            1..1,
+            [
+                "-setnumber".to_string(),
+                "h_bar_core".into(),
+                format!("{h:e}"),
+            ],
+        );
+    }
+    args
 }
 
 /// Meshes `geo` into the binary `.msh` 4.1 `out_msh` (written by gmsh as

@@ -75,6 +75,9 @@ pub struct RawMeshSpec {
     pub h_interface: Option<RawQuantity>,
     /// Mesh size at the cube's outer faces (length; default 5 mm).
     pub h_outer: Option<RawQuantity>,
+    /// Largest mesh size in the bar's core (length; default: the whole bar at
+    /// h_interface).
+    pub h_bar_core: Option<RawQuantity>,
     /// gmsh 3D algorithm: delaunay | frontal | mmg3d | hxt (default hxt).
     pub algorithm_3d: Option<Algorithm3d>,
     /// true | false | gmsh | netgen | none (default true = gmsh).
@@ -92,6 +95,11 @@ pub struct MeshSpec {
     pub h_interface: f64,
     /// Mesh size at the cube's outer faces, m.
     pub h_outer: f64,
+    /// Largest mesh size in the bar's core, m; `None`: h_interface in the
+    /// whole bar. Left out of the serialised spec when unset, so that meshes
+    /// without it keep their cache keys.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub h_bar_core: Option<f64>,
     pub algorithm_3d: Algorithm3d,
     pub optimize: Optimize,
     /// Number of gmsh threads (≥ 1).
@@ -105,6 +113,7 @@ impl Default for MeshSpec {
         MeshSpec {
             h_interface: DEFAULT_H_INTERFACE,
             h_outer: DEFAULT_H_OUTER,
+            h_bar_core: None,
             algorithm_3d: Algorithm3d::Hxt,
             optimize: Optimize::Gmsh,
             threads: 1,
@@ -132,6 +141,11 @@ impl RawMeshSpec {
             Some(q) => q.to_si(Dim::Length, "mesh.h_outer")?,
             None => d.h_outer,
         };
+        let h_bar_core = self
+            .h_bar_core
+            .as_ref()
+            .map(|q| q.to_si(Dim::Length, "mesh.h_bar_core"))
+            .transpose()?;
         let timeout = match &self.timeout {
             Some(q) => q.to_si(Dim::Time, "mesh.timeout")?,
             None => d.timeout,
@@ -151,6 +165,14 @@ impl RawMeshSpec {
                 format!("must be ≥ h_interface ({h_interface} m), got {h_outer} m"),
             ));
         }
+        if let Some(h) = h_bar_core {
+            if h < h_interface {
+                return Err(bad(
+                    "h_bar_core",
+                    format!("must be ≥ h_interface ({h_interface} m), got {h} m"),
+                ));
+            }
+        }
         if timeout <= 0.0 {
             return Err(bad("timeout", format!("must be > 0 s, got {timeout} s")));
         }
@@ -167,6 +189,7 @@ impl RawMeshSpec {
         Ok(MeshSpec {
             h_interface,
             h_outer,
+            h_bar_core,
             algorithm_3d: self.algorithm_3d.unwrap_or(d.algorithm_3d),
             optimize,
             threads,
@@ -186,6 +209,23 @@ mod tests {
         assert_eq!(spec, MeshSpec::default());
         assert_eq!(spec.h_interface, 0.4e-3);
         assert_eq!(spec.h_outer, 5e-3);
+    }
+
+    /// The bar core's size is at least h_interface; unset, it leaves the
+    /// serialised spec (and so every mesh key) as it was.
+    #[test]
+    fn bar_core_is_checked_and_absent_when_unset() {
+        let raw: RawMeshSpec = serde_yaml::from_str("h_bar_core: 0.1 mm").unwrap();
+        let e = raw.resolve().unwrap_err().to_string();
+        assert!(
+            e.contains("mesh.h_bar_core") && e.contains("h_interface"),
+            "{e}"
+        );
+        let raw: RawMeshSpec = serde_yaml::from_str("h_bar_core: 3 mm").unwrap();
+        assert_eq!(raw.resolve().unwrap().h_bar_core, Some(3e-3));
+        // Unset, it is not part of the resolved spec that mesh keys hash.
+        let json = serde_json::to_value(MeshSpec::default()).unwrap();
+        assert!(json.get("h_bar_core").is_none(), "{json}");
     }
 
     /// Unknown keys and out-of-range values are errors naming the key (SPEC §8).
