@@ -22,6 +22,24 @@ pub const MIN_VERSION: (u32, u32) = (4, 8);
 const SETUP_HINT: &str = "run `scripts/setup.sh` (installs a pinned gmsh in .tools/gmsh-venv), \
                           or set GMSH to a working gmsh executable";
 
+/// The system libraries gmsh's PyPI wheel links against without bundling
+/// them (Debian package names, as `scripts/setup.sh` installs them).
+const WHEEL_SYSTEM_LIBRARIES: &str = "libglu1-mesa libgl1 libxrender1 libxcursor1 libxfixes3 \
+                                      libxext6 libxft2 libfontconfig1 libxinerama1 libx11-6 libgomp1";
+
+/// A gmsh that cannot load a shared library (the PyPI wheel on a machine
+/// without X11/GL libraries) says which packages provide them.
+fn with_library_hint(problem: String) -> String {
+    if problem.contains("cannot open shared object file") {
+        format!(
+            "{problem}\ngmsh cannot load a system library: install {WHEEL_SYSTEM_LIBRARIES} \
+             (Debian/Ubuntu: apt-get install; `scripts/setup.sh --no-build` does it)"
+        )
+    } else {
+        problem
+    }
+}
+
 /// A located, working gmsh.
 #[derive(Debug, Clone)]
 pub struct Gmsh {
@@ -178,7 +196,7 @@ impl Gmsh {
             .run(&[OsStr::new("--version")], None, Duration::from_secs(60))
             .map_err(|e| GmshError::Version {
                 path: g.program.clone(),
-                problem: e.to_string(),
+                problem: with_library_hint(e.to_string()),
             })?;
         let text = format!("{}\n{}", out.stdout, out.stderr);
         let (version, (major, minor)) = parse_version(&text).ok_or_else(|| GmshError::Version {

@@ -35,3 +35,25 @@ fn bad_gmsh_variable_is_reported_with_the_fix() {
     };
     assert!(text.contains("nonexistent"), "{text}");
 }
+
+/// A gmsh that cannot load a system library (the PyPI wheel without X11/GL
+/// libraries) is reported with the packages that provide them.
+#[test]
+fn missing_system_library_names_the_packages() {
+    let dir = std::env::temp_dir().join(format!("ribbar-gmsh-lib-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let fake = dir.join("gmsh");
+    std::fs::write(
+        &fake,
+        "#!/bin/sh\necho 'OSError: libGLU.so.1: cannot open shared object file: No such file or directory' >&2\nexit 1\n",
+    )
+    .unwrap();
+    use std::os::unix::fs::PermissionsExt;
+    std::fs::set_permissions(&fake, std::fs::Permissions::from_mode(0o755)).unwrap();
+    let msg = Gmsh::probe(fake).unwrap_err().to_string();
+    assert!(
+        msg.contains("libGLU.so.1") && msg.contains("libglu1-mesa") && msg.contains("setup.sh"),
+        "{msg}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
