@@ -43,13 +43,19 @@ fn missing_system_library_names_the_packages() {
     let dir = std::env::temp_dir().join(format!("ribbar-gmsh-lib-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let fake = dir.join("gmsh");
-    std::fs::write(
-        &fake,
-        "#!/bin/sh\necho 'OSError: libGLU.so.1: cannot open shared object file: No such file or directory' >&2\nexit 1\n",
-    )
-    .unwrap();
-    use std::os::unix::fs::PermissionsExt;
-    std::fs::set_permissions(&fake, std::fs::Permissions::from_mode(0o755)).unwrap();
+    // Written by a child shell, not by this process: an executable this
+    // process held open for writing while the other test forks would fail
+    // to start with "Text file busy".
+    let script = "#!/bin/sh\necho 'OSError: libGLU.so.1: cannot open shared object file: No such file or directory' >&2\nexit 1\n";
+    let written = std::process::Command::new("sh")
+        .arg("-c")
+        .arg("printf '%s' \"$1\" > \"$2\" && chmod 755 \"$2\"")
+        .arg("sh")
+        .arg(script)
+        .arg(&fake)
+        .status()
+        .unwrap();
+    assert!(written.success());
     let msg = Gmsh::probe(fake).unwrap_err().to_string();
     assert!(
         msg.contains("libGLU.so.1") && msg.contains("libglu1-mesa") && msg.contains("setup.sh"),
