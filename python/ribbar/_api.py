@@ -339,25 +339,22 @@ def material(
     `path` lists the path's points (`{"t": 1, "un": 1e-4}`; a key `s...`/`t...`
     holds a stress), replacing the file's. Returns one row per increment,
     SI columns, units in `frame.attrs["units"]`."""
-    if isinstance(law, Mapping):
-        test: Dict[str, Any] = dict(law)
-    else:
-        test = None  # type: ignore[assignment]
+    if not isinstance(law, Mapping) and (path is not None or increments is not None):
+        raise ValueError(
+            "material: give `law` as a mapping to combine it with `path` or "
+            "`increments`, or a test file alone"
+        )
     with tempfile.TemporaryDirectory(prefix="ribbar-material-") as tmp:
-        if test is None and path is None and increments is None:
-            test_file = Path(law)  # type: ignore[arg-type]
-        else:
-            if test is None:
-                raise ValueError(
-                    "material: give `law` as a mapping to combine it with `path` or "
-                    "`increments`, or a test file alone"
-                )
+        if isinstance(law, Mapping):
+            test: Dict[str, Any] = dict(law)
             if path is not None:
                 test["path"] = [dict(p) for p in path]
             if increments is not None:
                 test["increments"] = int(increments)
             test_file = Path(tmp) / "test.yaml"
             test_file.write_text(json.dumps(test))
+        else:
+            test_file = Path(law)
         out = Path(tmp) / "table.csv"
         argv = ["material", str(test_file), "-o", str(out)]
         code, output = _call(argv, progress=False, verbose=False)
