@@ -11,6 +11,7 @@
 //!   steps while the tangent drifts slowly (damage, friction).
 
 pub mod amg;
+pub mod multigrid;
 
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::perm::PermRef;

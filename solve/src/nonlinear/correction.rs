@@ -12,10 +12,11 @@
 //! iterations with it.
 
 use super::control::{Border, BorderedPreconditioner};
+use super::workspace::Kept;
 use super::workspace::Workspace;
 use crate::assembly::{Outputs, States, Tangents};
 use crate::laws::TangentKind;
-use crate::linalg::{gmres, pcg, LinearError, SplitMatrix, SymLower};
+use crate::linalg::{gmres, pcg, LinearError, Preconditioner, SplitMatrix, SymLower};
 use crate::spec::solver::LinearSolverKind;
 use std::time::Instant;
 
@@ -42,28 +43,29 @@ impl Workspace<'_> {
                 *v = 0.5 * (*v + w);
             }
         }
-        if self.settings.linear_solver == LinearSolverKind::Pcg
-            && self.lin.chol.is_factored()
-            && border.is_none()
+        if let (LinearSolverKind::Pcg, Kept::Factor(chol), None) =
+            (self.settings.linear_solver, &self.lin.kept, border)
         {
-            let t = Instant::now();
-            let mat = SymLower {
-                col_ptr: &self.system.col_ptr,
-                row_idx: &self.system.row_idx,
-                values: &self.lower,
-            };
-            let res = pcg(
-                mat,
-                &self.lin.chol,
-                rhs,
-                du,
-                self.settings.pcg_tolerance,
-                self.settings.pcg_max_iterations,
-            );
-            self.wall.solve += t.elapsed().as_secs_f64();
-            if let Ok(info) = res {
-                self.lin.pcg_iterations += info.iterations;
-                return Ok(());
+            if chol.is_factored() {
+                let t = Instant::now();
+                let mat = SymLower {
+                    col_ptr: &self.system.col_ptr,
+                    row_idx: &self.system.row_idx,
+                    values: &self.lower,
+                };
+                let res = pcg(
+                    mat,
+                    chol,
+                    rhs,
+                    du,
+                    self.settings.pcg_tolerance,
+                    self.settings.pcg_max_iterations,
+                );
+                self.wall.solve += t.elapsed().as_secs_f64();
+                if let Ok(info) = res {
+                    self.lin.pcg_iterations += info.iterations;
+                    return Ok(());
+                }
             }
         }
         let mut values = std::mem::take(&mut self.lower);
@@ -81,9 +83,10 @@ impl Workspace<'_> {
         self.factor_solve(rhs, du, border)
     }
 
+    /// Factorises `values` or builds the multigrid hierarchy of them.
     fn factorize(&mut self, values: &[f64]) -> Result<(), LinearError> {
         let t = Instant::now();
-        let res = self.lin.chol.factorize(values);
+        let res = self.lin.kept.build(values);
         self.wall.factorisation += t.elapsed().as_secs_f64();
         self.lin.factorisations += 1;
         res
@@ -98,12 +101,10 @@ impl Workspace<'_> {
     ) -> Result<(), LinearError> {
         let t = Instant::now();
         du.copy_from_slice(rhs);
-        let out = match border {
-            None => self.lin.chol.solve_in_place(du),
-            Some(b) => BorderedPreconditioner::new(&self.lin.chol, b).and_then(|p| {
-                use crate::linalg::Preconditioner;
-                p.apply(du)
-            }),
+        let out = match (border, &self.lin.kept) {
+            (None, Kept::Factor(chol)) => chol.solve_in_place(du),
+            (None, kept) => kept.apply(du),
+            (Some(b), kept) => BorderedPreconditioner::new(kept, b).and_then(|p| p.apply(du)),
         };
         self.wall.solve += t.elapsed().as_secs_f64();
         out
@@ -163,7 +164,7 @@ impl Workspace<'_> {
             upper: if upper.is_empty() { &lower } else { &upper },
         };
         let out = (|| {
-            if self.lin.chol.is_factored()
+            if self.lin.kept.is_ready()
                 && !self.lin.refactor
                 && self.try_gmres(a, border, rhs, du, eta)
             {
@@ -179,6 +180,9 @@ impl Workspace<'_> {
                 return Ok(());
             }
             self.lin.refactor = true;
+            if matches!(self.lin.kept, Kept::Multigrid { .. }) {
+                return self.multigrid_fallback(start, u, a, (rhs, du), eta, border);
+            }
             self.factor_solve(rhs, du, border)
         })();
         self.lower = lower;
@@ -198,8 +202,8 @@ impl Workspace<'_> {
         let max = self.settings.krylov_max_iterations;
         let t = Instant::now();
         let res = match border {
-            None => gmres(&a, &self.lin.chol, rhs, du, eta, max),
-            Some(b) => BorderedPreconditioner::new(&self.lin.chol, b)
+            None => gmres(&a, &self.lin.kept, rhs, du, eta, max),
+            Some(b) => BorderedPreconditioner::new(&self.lin.kept, b)
                 .and_then(|p| gmres(&b.operator(&a), &p, rhs, du, eta, max)),
         };
         self.wall.solve += t.elapsed().as_secs_f64();
@@ -214,6 +218,61 @@ impl Workspace<'_> {
                 false
             }
             Err(_) => false,
+        }
+    }
+
+    /// GMRES failed with a fresh hierarchy of the symmetric part (which may
+    /// be indefinite while points soften, where the multigrid's smoother
+    /// assumes a positive spectrum): rebuild it from the secant matrix
+    /// (positive definite) and retry; failing that, solve the secant system
+    /// itself, a quasi-Newton correction like the Cholesky route's.
+    fn multigrid_fallback(
+        &mut self,
+        start: &States,
+        u: &[f64],
+        a: SplitMatrix<'_>,
+        (rhs, du): (&[f64], &mut [f64]),
+        eta: f64,
+        border: Option<&Border<'_>>,
+    ) -> Result<(), LinearError> {
+        let mut secant = std::mem::take(&mut self.lin.preconditioner);
+        let e = self
+            .system
+            .evaluate(
+                self.laws,
+                u,
+                start,
+                &mut self.trial,
+                Tangents::all(TangentKind::Secant),
+                Outputs::with_matrix(&mut self.f_int, &mut secant),
+            )
+            .map_err(|_| LinearError::NonFinite);
+        self.lin.preconditioner = secant;
+        self.wall.add_eval(&e?);
+        let values = std::mem::take(&mut self.lin.preconditioner);
+        let res = self.factorize(&values);
+        self.lin.preconditioner = values;
+        res?;
+        if self.try_gmres(a, border, rhs, du, eta) {
+            return Ok(());
+        }
+        let values = std::mem::take(&mut self.lin.preconditioner);
+        let secant = SplitMatrix {
+            col_ptr: a.col_ptr,
+            row_idx: a.row_idx,
+            lower: &values,
+            upper: &values,
+        };
+        let ok = self.try_gmres(secant, border, rhs, du, eta);
+        self.lin.preconditioner = values;
+        if ok {
+            Ok(())
+        } else {
+            Err(LinearError::KrylovNotConverged {
+                iterations: self.settings.krylov_max_iterations,
+                tolerance: eta,
+                reached: f64::NAN,
+            })
         }
     }
 }

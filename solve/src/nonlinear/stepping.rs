@@ -224,7 +224,7 @@ impl<'a> Driver<'a> {
         started: Instant,
     ) -> Result<Self, SolveError> {
         let mut wall = WallTimes::default();
-        let lin = LinearState::new(system, settings, &mut wall)?;
+        let lin = LinearState::new(system, settings, &problem.model.nodes, &mut wall)?;
         let n_total = system.dofs().n_total();
         let ws = Workspace {
             system,
@@ -296,7 +296,7 @@ impl<'a> Driver<'a> {
             // restore, not counted among the run's factorisations).
             if p.values.len() == lin.preconditioner.len() {
                 let t = Instant::now();
-                lin.chol.factorize(&p.values)?;
+                lin.kept.build(&p.values)?;
                 self.wall.factorisation += t.elapsed().as_secs_f64();
                 lin.preconditioner = p.values;
                 lin.refactor = p.refactor;
@@ -937,7 +937,7 @@ impl<'a> Driver<'a> {
             rows: path.rows.clone(),
             summary: path.summary.clone(),
             preconditioner: (self.settings.linear_solver != LinearSolverKind::Cholesky
-                && lin.chol.is_factored())
+                && lin.kept.is_ready())
             .then(|| PreconditionerState {
                 values: lin.preconditioner.clone(),
                 refactor: lin.refactor,

@@ -6,8 +6,10 @@ use super::summary::WallTimes;
 use crate::assembly::{
     AssemblyError, DofMap, ElementLaws, LoadDerivatives, Outputs, States, System, Tangents,
 };
-use crate::linalg::{Cholesky, LinearError};
-use crate::spec::solver::{LinearSolverKind, Precision, SolverSettings};
+use crate::linalg::amg::{AmgError, AmgParams};
+use crate::linalg::multigrid::{FreeDofMultigrid, NodeBlockLayout};
+use crate::linalg::{Cholesky, LinearError, Preconditioner};
+use crate::spec::solver::{LinearSolverKind, Precision, PreconditionerKind, SolverSettings};
 use std::time::Instant;
 
 pub(crate) struct Workspace<'a> {
@@ -90,50 +92,118 @@ pub(crate) fn reaction_norm(system: &System, f_int: &[f64]) -> f64 {
         .sqrt()
 }
 
+/// The preconditioner kept across iterations and steps (PCG, GMRES) or the
+/// factor of the current matrix (Cholesky mode).
+pub(crate) enum Kept {
+    Factor(Box<Cholesky>),
+    Multigrid {
+        layout: Box<NodeBlockLayout>,
+        hierarchy: Option<Box<FreeDofMultigrid>>,
+    },
+}
+
+impl Kept {
+    /// Whether a preconditioner (a factor or a hierarchy) is available.
+    pub(crate) fn is_ready(&self) -> bool {
+        match self {
+            Kept::Factor(c) => c.is_factored(),
+            Kept::Multigrid { hierarchy, .. } => hierarchy.is_some(),
+        }
+    }
+
+    /// Builds the preconditioner of the symmetric matrix with lower values
+    /// `values`.
+    pub(crate) fn build(&mut self, values: &[f64]) -> Result<(), LinearError> {
+        match self {
+            Kept::Factor(c) => c.factorize(values),
+            Kept::Multigrid { layout, hierarchy } => {
+                *hierarchy = None;
+                let h = layout
+                    .build(values, AmgParams::default())
+                    .map_err(|e| match e {
+                        AmgError::Coarse(e) => e,
+                        _ => LinearError::NonFinite,
+                    })?;
+                *hierarchy = Some(Box::new(h));
+                Ok(())
+            }
+        }
+    }
+}
+
+impl Preconditioner for Kept {
+    fn apply(&self, r: &mut [f64]) -> Result<(), LinearError> {
+        match self {
+            Kept::Factor(c) => c.precondition(r),
+            Kept::Multigrid {
+                hierarchy: Some(h), ..
+            } => h.apply(r),
+            Kept::Multigrid {
+                hierarchy: None, ..
+            } => Err(LinearError::NonFinite),
+        }
+    }
+}
+
 /// Linear-algebra state reused across iterations and steps.
 pub(crate) struct LinearState {
-    /// Factor of the current matrix (Cholesky mode) or of an older one
-    /// (PCG, GMRES: the preconditioner).
-    pub(crate) chol: Cholesky,
+    pub(crate) kept: Kept,
     pub(crate) factorisations: usize,
     pub(crate) pcg_iterations: usize,
     pub(crate) krylov_iterations: usize,
-    /// Lower values of the matrix held in `chol` when it is kept across
-    /// iterations (PCG, GMRES preconditioner); saved in checkpoints.
+    /// Lower values of the matrix the kept preconditioner was built from
+    /// (PCG, GMRES); saved in checkpoints.
     pub(crate) preconditioner: Vec<f64>,
-    /// The preconditioner is missing or has become poor: factorise anew.
+    /// The preconditioner is missing or has become poor: build it anew.
     pub(crate) refactor: bool,
 }
 
 impl LinearState {
-    /// The symbolic analysis of `system`'s pattern (timed into `wall`).
+    /// The symbolic analysis (Cholesky) or the node-block layout (multigrid)
+    /// of `system`'s pattern, timed into `wall`; `nodes` are the model's
+    /// node coordinates (m), the multigrid's rigid-body modes.
     pub(crate) fn new(
         system: &System,
         settings: &SolverSettings,
+        nodes: &[[f64; 3]],
         wall: &mut WallTimes,
     ) -> Result<Self, LinearError> {
         let dofs = system.dofs();
-        let mut dof_node = vec![0usize; dofs.n_free()];
-        for d in 0..dofs.n_total() {
-            if let Some(f) = dofs.free_index(d) {
-                dof_node[f] = d / 3;
-            }
-        }
         let t = Instant::now();
-        let mut chol = Cholesky::new(
-            &system.col_ptr,
-            &system.row_idx,
-            settings.ordering,
-            &dof_node,
-        )?;
-        if settings.linear_solver == LinearSolverKind::Gmres {
-            chol.set_single_precision_preconditioner(
-                settings.preconditioner_precision == Precision::Single,
-            );
-        }
+        let kept = if settings.preconditioner == PreconditionerKind::Multigrid {
+            let layout = NodeBlockLayout::new(
+                &system.col_ptr,
+                &system.row_idx,
+                |d| dofs.free_index(d),
+                nodes,
+            )?;
+            Kept::Multigrid {
+                layout: Box::new(layout),
+                hierarchy: None,
+            }
+        } else {
+            let mut dof_node = vec![0usize; dofs.n_free()];
+            for d in 0..dofs.n_total() {
+                if let Some(f) = dofs.free_index(d) {
+                    dof_node[f] = d / 3;
+                }
+            }
+            let mut chol = Cholesky::new(
+                &system.col_ptr,
+                &system.row_idx,
+                settings.ordering,
+                &dof_node,
+            )?;
+            if settings.linear_solver == LinearSolverKind::Gmres {
+                chol.set_single_precision_preconditioner(
+                    settings.preconditioner_precision == Precision::Single,
+                );
+            }
+            Kept::Factor(Box::new(chol))
+        };
         wall.factorisation += t.elapsed().as_secs_f64();
         Ok(Self {
-            chol,
+            kept,
             factorisations: 0,
             pcg_iterations: 0,
             krylov_iterations: 0,

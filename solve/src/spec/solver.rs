@@ -26,6 +26,8 @@ pub enum SolverSpecError {
         value: f64,
         bound: &'static str,
     },
+    #[error("{key}: {problem}")]
+    Combination { key: String, problem: &'static str },
 }
 
 /// `loading` as written.
@@ -198,6 +200,21 @@ pub struct RawSolver {
     pub impl_ex_tolerance: Option<f64>,
     pub path_following: Option<PathFollowing>,
     pub sliver_quality: Option<f64>,
+    pub preconditioner: Option<PreconditionerKind>,
+}
+
+/// What preconditions GMRES in the Newton–Krylov solver.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum PreconditionerKind {
+    /// A kept sparse Cholesky factor of the symmetric part (or the secant
+    /// matrix): few GMRES iterations, memory of the factor's fill.
+    #[default]
+    Cholesky,
+    /// A kept smoothed-aggregation multigrid hierarchy of the same matrix
+    /// (one V-cycle per GMRES iteration): memory about twice the matrix,
+    /// more GMRES iterations.
+    Multigrid,
 }
 
 /// How the GMRES tolerance of each Newton correction (the forcing term η)
@@ -352,6 +369,14 @@ pub struct SolverSettings {
     /// "Law switches"). 0 disables; left out of the serialised form then.
     #[serde(default, skip_serializing_if = "is_zero")]
     pub sliver_quality: f64,
+    /// The GMRES preconditioner (`linear_solver: gmres` only). Left out of
+    /// the serialised form at its default.
+    #[serde(default, skip_serializing_if = "is_cholesky")]
+    pub preconditioner: PreconditionerKind,
+}
+
+fn is_cholesky(p: &PreconditionerKind) -> bool {
+    *p == PreconditionerKind::Cholesky
 }
 
 fn is_zero(v: &f64) -> bool {
@@ -399,6 +424,7 @@ impl Default for SolverSettings {
             impl_ex_tolerance: DEFAULT_IMPL_EX_TOLERANCE,
             path_following: PathFollowing::Auto,
             sliver_quality: 0.0,
+            preconditioner: PreconditionerKind::Cholesky,
         }
     }
 }
@@ -510,6 +536,17 @@ impl RawSolver {
                         bound: "must be in [0, 1)",
                     });
                 }
+            },
+            preconditioner: {
+                let p = self.preconditioner.unwrap_or(d.preconditioner);
+                let linear = self.linear_solver.unwrap_or(d.linear_solver);
+                if p == PreconditionerKind::Multigrid && linear != LinearSolverKind::Gmres {
+                    return Err(SolverSpecError::Combination {
+                        key: "solver.preconditioner".into(),
+                        problem: "multigrid preconditions GMRES only: set linear_solver: gmres (the default) or leave preconditioner out",
+                    });
+                }
+                p
             },
         })
     }
