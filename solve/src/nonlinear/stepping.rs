@@ -270,6 +270,9 @@ impl<'a> Driver<'a> {
             rows: Vec::new(),
             summary: Summary {
                 dofs: self.ws.system.dofs().n_free(),
+                preconditioner: self
+                    .settings
+                    .preconditioner_for(self.ws.system.dofs().n_free()),
                 ..Summary::default()
             },
             lambda: 0.0,

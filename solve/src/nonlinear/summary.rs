@@ -2,6 +2,7 @@
 //! times by phase and how it ended.
 
 use crate::assembly::EvalTimings;
+use crate::spec::solver::PreconditionerKind;
 use serde::{Deserialize, Serialize};
 
 /// Wall times by phase, s.
@@ -76,6 +77,10 @@ pub struct Summary {
     /// explicit tets.
     #[serde(default)]
     pub damage_passes: usize,
+    /// The preconditioner GMRES used (`solver.preconditioner` resolved;
+    /// `cholesky` for the direct and PCG linear solvers).
+    #[serde(default)]
+    pub preconditioner: PreconditionerKind,
     pub wall_time_s: WallTimes,
 }
 
