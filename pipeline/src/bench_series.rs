@@ -14,7 +14,7 @@ use crate::commands::run_scene;
 use crate::post::{self, CurveAxis, CurveRow, ErrorTimeSeries, GridResult};
 use crate::progress::Printer;
 use crate::scene::Scene;
-use crate::study::{value_arg, Study};
+use crate::study::Study;
 use anyhow::{bail, Context, Result};
 use serde_json::Value;
 use std::fmt::Write as _;
@@ -691,7 +691,7 @@ impl StressCase {
                 format!(
                     "{}={}",
                     k.rsplit('.').next().unwrap_or(k),
-                    value_arg(v).trim_matches('"')
+                    crate::post::value_label(v)
                 )
             })
             .collect::<Vec<_>>()

@@ -202,7 +202,7 @@ pub fn collect(study: &Study, work: &Path, out: &Path, printer: &Printer) -> Res
                 format!(
                     "{}={}",
                     k.rsplit('.').next().unwrap_or(k),
-                    crate::study::value_arg(v).trim_matches('"')
+                    crate::post::value_label(v)
                 )
             })
             .collect::<Vec<_>>()

@@ -78,13 +78,30 @@ impl From<&serde_yaml::Value> for Cell {
             },
             serde_yaml::Value::String(s) => Cell::Text(s.clone()),
             serde_yaml::Value::Bool(b) => Cell::Text(b.to_string()),
-            other => Cell::Text(
-                serde_yaml::to_string(other)
-                    .unwrap_or_default()
-                    .trim()
-                    .replace('\n', " "),
-            ),
+            other => Cell::Text(value_label(other)),
         }
+    }
+}
+
+/// A study parameter's value as it reads in a table cell or a legend: one
+/// line, strings unquoted, mappings (a whole law, say) as `k: v, k: v`.
+pub fn value_label(v: &serde_yaml::Value) -> String {
+    use serde_yaml::Value;
+    match v {
+        Value::Null => String::new(),
+        Value::Bool(b) => b.to_string(),
+        Value::Number(n) => n.to_string(),
+        Value::String(s) => s.clone(),
+        Value::Sequence(items) => format!(
+            "[{}]",
+            items.iter().map(value_label).collect::<Vec<_>>().join(", ")
+        ),
+        Value::Mapping(m) => m
+            .iter()
+            .map(|(k, v)| format!("{}: {}", value_label(k), value_label(v)))
+            .collect::<Vec<_>>()
+            .join(", "),
+        Value::Tagged(t) => value_label(&t.value),
     }
 }
 
@@ -407,4 +424,19 @@ pub fn write_convergence_tables(
         convergence_order_table(studies).to_markdown()
     );
     write_atomic(md, text.as_bytes())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_whole_law_as_a_parameter_reads_on_one_line() {
+        let v: serde_yaml::Value =
+            serde_yaml::from_str("{law: tvergaard, ft: 1.8 MPa, delta_s: 0.3}").unwrap();
+        assert_eq!(value_label(&v), "law: tvergaard, ft: 1.8 MPa, delta_s: 0.3");
+        assert_eq!(Cell::from(&v), Cell::Text(value_label(&v)));
+        let q: serde_yaml::Value = serde_yaml::from_str("[1, 2.5]").unwrap();
+        assert_eq!(value_label(&q), "[1, 2.5]");
+    }
 }
