@@ -152,7 +152,7 @@ impl NodeBlockLayout {
 
 /// Rigid-body modes of the nodes about their centroid, 6 per global DOF,
 /// zero where `free(d)` is false.
-fn rigid_body_modes(nodes: &[[f64; 3]], free: impl Fn(usize) -> bool) -> Vec<f64> {
+pub fn rigid_body_modes(nodes: &[[f64; 3]], free: impl Fn(usize) -> bool) -> Vec<f64> {
     let n = nodes.len().max(1) as f64;
     let mut c = [0.0; 3];
     for x in nodes {

@@ -121,18 +121,7 @@ impl Workspace<'_> {
     ) -> Result<(), LinearError> {
         let mut res = self.factorize(values);
         if matches!(res, Err(LinearError::NotPositiveDefinite { .. })) {
-            let e = self
-                .system
-                .evaluate(
-                    self.laws,
-                    u,
-                    start,
-                    &mut self.trial,
-                    Tangents::all(TangentKind::Secant),
-                    Outputs::with_matrix(&mut self.f_int, values),
-                )
-                .map_err(|_| LinearError::NonFinite)?;
-            self.wall.add_eval(&e);
+            self.secant_matrix(start, u, values)?;
             res = self.factorize(values);
         }
         res
@@ -236,19 +225,9 @@ impl Workspace<'_> {
         border: Option<&Border<'_>>,
     ) -> Result<(), LinearError> {
         let mut secant = std::mem::take(&mut self.lin.preconditioner);
-        let e = self
-            .system
-            .evaluate(
-                self.laws,
-                u,
-                start,
-                &mut self.trial,
-                Tangents::all(TangentKind::Secant),
-                Outputs::with_matrix(&mut self.f_int, &mut secant),
-            )
-            .map_err(|_| LinearError::NonFinite);
+        let e = self.secant_matrix(start, u, &mut secant);
         self.lin.preconditioner = secant;
-        self.wall.add_eval(&e?);
+        e?;
         let values = std::mem::take(&mut self.lin.preconditioner);
         let res = self.factorize(&values);
         self.lin.preconditioner = values;
@@ -274,5 +253,28 @@ impl Workspace<'_> {
                 reached: f64::NAN,
             })
         }
+    }
+
+    /// The secant matrix of the iterate `u` (from `start`) into `values`
+    /// (same internal forces and trial states as the tangent's evaluation).
+    fn secant_matrix(
+        &mut self,
+        start: &States,
+        u: &[f64],
+        values: &mut [f64],
+    ) -> Result<(), LinearError> {
+        let e = self
+            .system
+            .evaluate(
+                self.laws,
+                u,
+                start,
+                &mut self.trial,
+                Tangents::all(TangentKind::Secant),
+                Outputs::with_matrix(&mut self.f_int, values),
+            )
+            .map_err(|_| LinearError::NonFinite)?;
+        self.wall.add_eval(&e);
+        Ok(())
     }
 }

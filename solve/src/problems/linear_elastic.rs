@@ -313,29 +313,11 @@ pub fn apply_dirichlet(k: &mut Bsr, constrained: &[(usize, f64)]) -> Vec<f64> {
 /// The six rigid-body modes at the nodes (6 values per DOF), zero on the
 /// constrained DOFs; coordinates relative to the centroid.
 pub fn rigid_body_modes(p: &PerfectBond) -> Vec<f64> {
-    let n = p.nodes.len();
-    let mut c = [0.0; 3];
-    for x in &p.nodes {
-        for k in 0..3 {
-            c[k] += x[k] / n as f64;
-        }
-    }
-    let mut b = vec![0.0; 18 * n];
-    for (i, x) in p.nodes.iter().enumerate() {
-        let (x, y, z) = (x[0] - c[0], x[1] - c[1], x[2] - c[2]);
-        let rows = [
-            [1.0, 0.0, 0.0, 0.0, z, -y],
-            [0.0, 1.0, 0.0, -z, 0.0, x],
-            [0.0, 0.0, 1.0, y, -x, 0.0],
-        ];
-        for (k, row) in rows.iter().enumerate() {
-            b[(3 * i + k) * 6..(3 * i + k + 1) * 6].copy_from_slice(row);
-        }
-    }
+    let mut fixed = vec![false; 3 * p.nodes.len()];
     for &(d, _) in &p.constrained {
-        b[6 * d..6 * d + 6].iter_mut().for_each(|v| *v = 0.0);
+        fixed[d] = true;
     }
-    b
+    crate::linalg::multigrid::rigid_body_modes(&p.nodes, |d| !fixed[d])
 }
 
 /// Reaction on the loaded end along z (whole specimen, N): Σ of the
