@@ -8,12 +8,12 @@
 //! symmetric part is indefinite. Cholesky and PCG work on the symmetric part
 //! (or the secant matrix when that is indefinite): a quasi-Newton method
 //! with linear convergence. GMRES solves with the exact tangent (quadratic
-//! convergence), preconditioned by a factor kept while GMRES needs few
-//! iterations with it.
+//! convergence), preconditioned by a factor (or, `solver.preconditioner:
+//! multigrid`, a multigrid hierarchy) kept while GMRES needs few iterations
+//! with it.
 
 use super::control::{Border, BorderedPreconditioner};
-use super::workspace::Kept;
-use super::workspace::Workspace;
+use super::workspace::{Kept, Workspace};
 use crate::assembly::{Outputs, States, Tangents};
 use crate::laws::TangentKind;
 use crate::linalg::{gmres, pcg, LinearError, Preconditioner, SplitMatrix, SymLower};

@@ -171,8 +171,9 @@ pub enum LinearSolverKind {
     /// Conjugate gradients preconditioned by a reused Cholesky factor.
     Pcg,
     /// Newton–Krylov: GMRES on the exact (unsymmetric) consistent tangent,
-    /// right-preconditioned by a reused Cholesky factor of its symmetric
-    /// part (or of the secant matrix when that part is indefinite).
+    /// right-preconditioned by a reused Cholesky factor (or multigrid
+    /// hierarchy, `preconditioner`) of its symmetric part (or of the secant
+    /// matrix when that part is indefinite).
     #[default]
     Gmres,
 }
