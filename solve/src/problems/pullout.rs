@@ -111,7 +111,23 @@ pub fn pullout_conditions(model: &Model) -> Result<(Dirichlet, Measurement), Sol
             .copied()
             .max_by(|p, q| x(p)[1 - c].total_cmp(&x(q)[1 - c]))
             .expect("checked non-empty");
-        (lo, hi)
+        if lo != hi {
+            return (lo, hi);
+        }
+        // A coarse face may have a single node nearest the line: take the
+        // node nearest it on each side of the axis instead (off the line by
+        // up to an element size, so their u_y holds a little of the face's
+        // Poisson expansion; used only where the line has no second node).
+        let side = |negative: bool| {
+            face.iter()
+                .copied()
+                .filter(|n| (x(n)[1 - c] < 0.0) == negative && x(n)[1 - c] != 0.0)
+                .min_by(|p, q| x(p)[c].abs().total_cmp(&x(q)[c].abs()))
+        };
+        match (side(true), side(false)) {
+            (Some(a), Some(b)) => (a, b),
+            _ => (lo, hi),
+        }
     };
     // Nearest the line y = 0: two points at both ends hold u_y (y
     // translation and rotation about z); nearest x = 0: one holds u_x.
