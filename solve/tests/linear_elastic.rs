@@ -299,3 +299,28 @@ fn empty_loaded_end_is_an_error() {
     let e = PerfectBond::from_model(&m, 1e-5).unwrap_err().to_string();
     assert!(e.contains("bar_loaded_end"), "{e}");
 }
+
+/// A coarse bearing face may have a single node nearest the line y = 0: the
+/// two u_y supports then take the nearest node on each side of the axis, so
+/// the rotation about z is still held (a coarse R1 failed before its first
+/// step with "no extent in x").
+#[test]
+fn lateral_supports_hold_on_a_face_with_one_node_nearest_the_line() {
+    let mut m = specimen(6, 6);
+    // Distinct offsets in y: no two bearing-face nodes share |y|.
+    for (k, &n) in m.node_sets.concrete_bearing_face.clone().iter().enumerate() {
+        m.nodes[n as usize][1] += 1e-6 * (1.0 + k as f64 / 1000.0);
+    }
+    let (dir, _) = solve::problems::pullout::pullout_conditions(&m).unwrap();
+    let bearing: std::collections::HashSet<u32> =
+        m.node_sets.concrete_bearing_face.iter().copied().collect();
+    let uy: Vec<usize> = dir
+        .dofs
+        .iter()
+        .filter(|&&d| d % 3 == 1 && bearing.contains(&((d / 3) as u32)))
+        .map(|&d| d / 3)
+        .collect();
+    assert_eq!(uy.len(), 2, "{uy:?}");
+    let (xa, xb) = (m.nodes[uy[0]][0], m.nodes[uy[1]][0]);
+    assert!(xa * xb < 0.0, "u_y supports at x = {xa} and {xb}");
+}
