@@ -225,18 +225,19 @@ mod tests {
     use super::*;
     use crate::linalg::{gmres, SplitMatrix};
 
-    /// A chain of nodes joined by axial and transverse springs, the first
-    /// node clamped and one DOF of the last constrained: the lower triangle
-    /// on the free DOFs.
-    fn chain(
-        n_nodes: usize,
-    ) -> (
+    /// Lower CSC of the free system, free index of each global DOF, nodes.
+    type Chain = (
         Vec<usize>,
         Vec<usize>,
         Vec<f64>,
         Vec<Option<usize>>,
         Vec<[f64; 3]>,
-    ) {
+    );
+
+    /// A chain of nodes joined by axial and transverse springs, the first
+    /// node clamped and one DOF of the last constrained: the lower triangle
+    /// on the free DOFs.
+    fn chain(n_nodes: usize) -> Chain {
         let constrained = |d: usize| d < 3 || d == 3 * n_nodes - 1;
         let mut free_of = vec![None; 3 * n_nodes];
         let mut n_free = 0;
