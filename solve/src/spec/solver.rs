@@ -383,9 +383,10 @@ fn is_auto_preconditioner(p: &PreconditionerKind) -> bool {
 }
 
 /// Free DOFs from which `preconditioner: auto` takes the multigrid. Measured
-/// (docs/performance.md, "Multigrid preconditioner"): on R1 at the paper's
-/// mesh (412 k DOFs) the multigrid solve took 0.86× the Cholesky one's time
-/// and 0.27× its peak memory with the same curve; on r1-coarse (54 k) both
+/// (docs/performance.md, "The multigrid as the Newton–Krylov
+/// preconditioner"): on R1 at the paper's mesh (412 k DOFs) the multigrid
+/// solve took 641 s and 2.06 GiB against 743 s and 7.6 GiB for the Cholesky
+/// route (that one on the earlier metre-built mesh), the same curve; on r1-coarse (54 k) both
 /// took the same time; on tiny-ribbed (7 k) the Cholesky route was 2.8×
 /// faster.
 pub const MULTIGRID_MIN_DOFS: usize = 100_000;
