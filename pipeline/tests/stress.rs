@@ -269,6 +269,9 @@ fn multigrid_preconditioned_solve_follows_the_cholesky_curve() {
     assert_eq!(multigrid["completed"], true, "{multigrid}");
     assert_eq!(multigrid["energy_check"]["passed"], true, "{multigrid}");
     assert!(multigrid["summary"]["krylov_iterations"].as_u64().unwrap() > 0);
+    // The solve reports its peak memory (the whole process, MiB).
+    let rss = multigrid["summary"]["peak_rss_mib"].as_f64().unwrap();
+    assert!(rss > 1.0 && rss < 64.0 * 1024.0, "peak RSS {rss} MiB");
     // The two take different step sizes (their Newton iteration counts
     // differ, and the step control follows them), so the curves are
     // compared where both have a converged state: the same solution there.

@@ -923,6 +923,10 @@ impl<'a> Driver<'a> {
         now.total = self.started.elapsed().as_secs_f64();
         w.add(&now);
         summary.wall_time_s = w;
+        // A resumed run reports the larger of its invocations' peaks.
+        if let Some(rss) = peak_resident_mib() {
+            summary.peak_rss_mib = summary.peak_rss_mib.max(rss);
+        }
     }
 
     fn checkpoint(&self, path: &Path, next_step: f64) -> Checkpoint {
@@ -1127,4 +1131,13 @@ fn implicit_residual(
     residual(system.dofs(), &ws.f_int, &mut r);
     let reaction = reaction_norm(system, &ws.f_int);
     Ok(norm(&r) / if reaction > 0.0 { reaction } else { 1.0 })
+}
+
+/// The process's peak resident memory so far, MiB (Linux `VmHWM`); `None`
+/// where /proc is not available.
+fn peak_resident_mib() -> Option<f64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kib: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib / 1024.0)
 }

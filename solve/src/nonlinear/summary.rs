@@ -81,6 +81,10 @@ pub struct Summary {
     /// `cholesky` for the direct and PCG linear solvers).
     #[serde(default)]
     pub preconditioner: PreconditionerKind,
+    /// Peak resident memory of the solving process, MiB (0 where the
+    /// platform does not report it): the whole process, model included.
+    #[serde(default)]
+    pub peak_rss_mib: f64,
     pub wall_time_s: WallTimes,
 }
 
