@@ -224,12 +224,10 @@ impl Workspace<'_> {
         eta: f64,
         border: Option<&Border<'_>>,
     ) -> Result<(), LinearError> {
-        let mut secant = std::mem::take(&mut self.lin.preconditioner);
-        let e = self.secant_matrix(start, u, &mut secant);
-        self.lin.preconditioner = secant;
-        e?;
-        let values = std::mem::take(&mut self.lin.preconditioner);
-        let res = self.factorize(&values);
+        let mut values = std::mem::take(&mut self.lin.preconditioner);
+        let res = self
+            .secant_matrix(start, u, &mut values)
+            .and_then(|()| self.factorize(&values));
         self.lin.preconditioner = values;
         res?;
         if self.try_gmres(a, border, rhs, du, eta) {
