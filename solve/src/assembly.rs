@@ -329,6 +329,10 @@ pub struct Outputs<'a> {
     /// to the constrained ones that move with λ at their rates (see
     /// [`System::new`]). Needs `lower`.
     pub load: Option<&'a mut LoadDerivatives>,
+    /// The tets' element matrices kept from an earlier evaluation of the
+    /// same step, used and refreshed when the matrix is asked for without
+    /// the load derivatives (see [`KeptBulkMatrix`]).
+    pub kept_bulk: Option<&'a mut KeptBulkMatrix>,
 }
 
 impl<'a> Outputs<'a> {
@@ -339,6 +343,7 @@ impl<'a> Outputs<'a> {
             lower: None,
             upper: None,
             load: None,
+            kept_bulk: None,
         }
     }
     /// Internal forces and the lower-triangle tangent values.
@@ -348,6 +353,80 @@ impl<'a> Outputs<'a> {
             ..Self::forces(f_int)
         }
     }
+}
+
+/// The assembled matrices of the tets whose tangent was fixed by their
+/// committed state ([`crate::laws::BulkResponse::fixed_scale`]) at the
+/// evaluation that built it, kept between the evaluations of one step: in
+/// an IMPL-EX step every concrete tet is such, and so is elastic steel, so
+/// after the step's first evaluation only the tets whose tangent moves with
+/// the strain are built and scattered again. A kept tet whose tangent stops
+/// being the kept one enters as the difference of its two matrices.
+///
+/// It is rebuilt whenever the start states, the tangent kind, the imposed
+/// displacements or the laws differ from those it was built with (a
+/// fingerprint of them), so every evaluation of a step sees the same kept
+/// sum whatever ran before the step: a resumed run assembles bit for bit
+/// what the uninterrupted one did. One per run (or per [`ElementLaws`]).
+#[derive(Debug, Default)]
+pub struct KeptBulkMatrix {
+    fingerprint: Option<u64>,
+    /// Sum of the kept tets' matrices in the lower pattern, N/m.
+    values: Vec<f64>,
+    /// Per tet, the scale its kept matrix was built with; NaN: not kept.
+    scale: Vec<f64>,
+}
+
+impl KeptBulkMatrix {
+    /// Number of tets whose matrix is in the kept sum.
+    pub fn kept_tets(&self) -> usize {
+        self.scale.iter().filter(|s| !s.is_nan()).count()
+    }
+}
+
+/// What an evaluation does with one tet's element matrix.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum TetMatrix {
+    /// Into the evaluation's own values.
+    Scatter,
+    /// Into the kept sum, with its scale.
+    Keep(f64),
+    /// Already in the kept sum.
+    Kept,
+}
+
+/// How the tets' matrices are assembled in one evaluation.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum MatrixReuse {
+    /// No kept sum: every matrix built and scattered.
+    Off,
+    /// The kept sum is built in this evaluation.
+    Build,
+    /// The kept sum holds for this evaluation.
+    Reuse,
+}
+
+/// SplitMix64's finaliser over `state ⊕ value`: the fingerprint's mixing.
+fn mix(state: u64, value: u64) -> u64 {
+    let mut z = state.wrapping_add(0x9E37_79B9_7F4A_7C15) ^ value;
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}
+
+fn bulk_state_fingerprint(index: usize, s: &BulkState) -> u64 {
+    let words = [
+        s.kappa.to_bits(),
+        s.damage.to_bits(),
+        s.explicit_damage.map_or(u64::MAX, f64::to_bits),
+        s.kappa_increment.to_bits(),
+        s.alpha_t.to_bits(),
+    ];
+    let h = words
+        .iter()
+        .chain(&s.plastic_strain.map(f64::to_bits))
+        .fold(index as u64, |h, &w| mix(h, w));
+    mix(h, index as u64)
 }
 
 /// Block size of the parallel constitutive pass (elements).
@@ -420,6 +499,28 @@ impl System {
         &self.tet_geom
     }
 
+    /// What a [`KeptBulkMatrix`] is valid for: the tets' laws and start
+    /// states, the tangent kind and the imposed displacements.
+    fn kept_fingerprint(
+        &self,
+        laws: &ElementLaws,
+        start: &States,
+        kind: TangentKind,
+        u: &[f64],
+    ) -> u64 {
+        let states = start
+            .bulk
+            .par_iter()
+            .enumerate()
+            .map(|(i, s)| bulk_state_fingerprint(i, s))
+            .reduce(|| 0, u64::wrapping_add);
+        let imposed = (0..self.dofs.n_total())
+            .filter(|&d| self.dofs.free_index(d).is_none())
+            .fold(0u64, |h, d| mix(h, u[d].to_bits()));
+        let identity = mix(laws.tets.as_ptr() as u64, laws.tets.len() as u64);
+        mix(mix(mix(states, imposed), identity), kind as u64)
+    }
+
     /// Constitutive update at every integration point for the global
     /// displacement `u` (m, length 3·nodes) from the `start` states: writes
     /// the trial states and what `out` asks for (see [`Outputs`]) with the
@@ -475,6 +576,27 @@ impl System {
         let mut matrix = out.lower.as_deref_mut();
         let mut upper = out.upper.as_deref_mut();
         let mut load = out.load.as_deref_mut();
+        let mut kept = out
+            .kept_bulk
+            .as_deref_mut()
+            .filter(|_| want_k && load.is_none());
+        let reuse = match kept.as_deref_mut() {
+            None => MatrixReuse::Off,
+            Some(k) => {
+                let fingerprint = self.kept_fingerprint(laws, committed, bulk_kind, u);
+                if k.fingerprint == Some(fingerprint) {
+                    MatrixReuse::Reuse
+                } else {
+                    k.fingerprint = Some(fingerprint);
+                    k.values.clear();
+                    k.values.resize(self.row_idx.len(), 0.0);
+                    k.scale.clear();
+                    k.scale.resize(self.tets.len(), f64::NAN);
+                    MatrixReuse::Build
+                }
+            }
+        };
+        let mut actions = vec![TetMatrix::Scatter; BLOCK.min(self.tets.len())];
         let mut fbuf = vec![[0.0f64; 12]; BLOCK.min(self.tets.len())];
         let mut kbuf = vec![[0.0f64; 144]; if want_k { fbuf.len() } else { 0 }];
         let n_tets = self.tets.len();
@@ -485,8 +607,9 @@ impl System {
             let t0 = Instant::now();
             let states = &mut trial.bulk[start..end];
             let kslice: &mut [[f64; 144]] = if want_k { &mut kbuf[..len] } else { &mut [] };
+            let kept_scale: &[f64] = kept.as_deref().map_or(&[], |k| &k.scale[start..end]);
             let body = |(off, (state, f)): (usize, (&mut BulkState, &mut [f64; 12])),
-                        k: Option<&mut [f64; 144]>|
+                        k: Option<(&mut [f64; 144], &mut TetMatrix)>|
              -> Result<(), AssemblyError> {
                 let index = start + off;
                 let g = &self.tet_geom[index];
@@ -508,14 +631,42 @@ impl System {
                 }
                 *state = r.state;
                 g.internal_force(&r.stress, f);
-                if let Some(k) = k {
+                if let Some((k, action)) = k {
                     if !r.tangent.iter().all(|v| v.is_finite()) {
                         return Err(AssemblyError::NonFiniteBulk {
                             index,
                             what: "tangent",
                         });
                     }
-                    g.stiffness(&r.tangent, k);
+                    *action = match reuse {
+                        MatrixReuse::Off => TetMatrix::Scatter,
+                        MatrixReuse::Build => {
+                            r.fixed_scale.map_or(TetMatrix::Scatter, TetMatrix::Keep)
+                        }
+                        MatrixReuse::Reuse => {
+                            let kept = kept_scale[off];
+                            if r.fixed_scale.map(f64::to_bits) == Some(kept.to_bits()) {
+                                TetMatrix::Kept
+                            } else {
+                                TetMatrix::Scatter
+                            }
+                        }
+                    };
+                    if *action != TetMatrix::Kept {
+                        g.stiffness(&r.tangent, k);
+                    }
+                    if reuse == MatrixReuse::Reuse && *action == TetMatrix::Scatter {
+                        let kept = kept_scale[off];
+                        if !kept.is_nan() {
+                            // Left the kept tangent: its kept matrix comes off.
+                            let mut k_kept = [0.0; 144];
+                            g.stiffness(
+                                &(laws.tets[index].elastic_stiffness() * kept),
+                                &mut k_kept,
+                            );
+                            k.iter_mut().zip(&k_kept).for_each(|(a, b)| *a -= b);
+                        }
+                    }
                 }
                 Ok(())
             };
@@ -523,9 +674,9 @@ impl System {
                 states
                     .par_iter_mut()
                     .zip(fbuf[..len].par_iter_mut())
-                    .zip(kslice.par_iter_mut())
+                    .zip(kslice.par_iter_mut().zip(actions[..len].par_iter_mut()))
                     .enumerate()
-                    .try_for_each(|(off, ((s, f), k))| body((off, (s, f)), Some(k)))?;
+                    .try_for_each(|(off, ((s, f), (k, a)))| body((off, (s, f)), Some((k, a))))?;
             } else {
                 states
                     .par_iter_mut()
@@ -554,11 +705,29 @@ impl System {
                     f_int[di] += fbuf[off][i];
                 }
                 if let Some(m) = matrix.as_deref_mut() {
-                    scatter_block::<12>(&self.tet_map[index], &kbuf[off], m, upper.as_deref_mut());
+                    let map = &self.tet_map[index];
+                    match (actions[off], kept.as_deref_mut()) {
+                        (TetMatrix::Keep(scale), Some(k)) => {
+                            scatter_block::<12>(map, &kbuf[off], &mut k.values, None);
+                            k.scale[index] = scale;
+                        }
+                        (TetMatrix::Kept, _) => {}
+                        _ => scatter_block::<12>(map, &kbuf[off], m, upper.as_deref_mut()),
+                    }
                 }
             }
             timings.assembly += t1.elapsed().as_secs_f64();
             start = end;
+        }
+        if let (Some(k), Some(m)) = (kept, matrix) {
+            // The kept matrices are symmetric (a scaled elastic stiffness):
+            // the same values serve the transposed entries.
+            let t1 = Instant::now();
+            m.par_iter_mut().zip(&k.values).for_each(|(a, b)| *a += b);
+            if let Some(up) = upper {
+                up.par_iter_mut().zip(&k.values).for_each(|(a, b)| *a += b);
+            }
+            timings.assembly += t1.elapsed().as_secs_f64();
         }
 
         Ok(())

@@ -714,3 +714,111 @@ fn mazars_extrapolation_follows_the_softening_law() {
     };
     assert_eq!(steel.extrapolate(&s, 3.0), s);
 }
+
+/// `fixed_scale` (the assembly keeps such element matrices through a
+/// step): when a law reports a scale s, its tangent is exactly s times its
+/// elastic stiffness, and every strain of the step that reports one reports
+/// the same s (it is fixed by the committed state); a tangent that moves
+/// with the strain (growing implicit damage, a consistent plastic tangent)
+/// reports none.
+#[test]
+fn a_fixed_scale_is_the_tangent_over_the_elastic_stiffness_for_every_strain() {
+    let law = mazars();
+    let e0 = law.eps_d0;
+    let uniaxial =
+        |x: f64| Vector6::new(x * e0, -0.2 * x * e0, -0.2 * x * e0, 0.1 * x * e0, 0.0, 0.0);
+    let damaged = bulk_history(
+        &law,
+        &[[2.0 * e0, -0.4 * e0, -0.4 * e0, 0.2 * e0, 0.0, 0.0]],
+    );
+    assert!(damaged.damage > 0.0);
+    let impl_ex = BulkState {
+        explicit_damage: Some(0.5 * (1.0 + damaged.damage)),
+        ..damaged
+    };
+    let steel = j2();
+    let yield_strain = steel.yield_stress / steel.young_modulus;
+    let bar = |x: f64| {
+        Vector6::new(
+            x * yield_strain,
+            -0.3 * x * yield_strain,
+            -0.3 * x * yield_strain,
+            0.0,
+            0.0,
+            0.0,
+        )
+    };
+    let elastic_law = solve::laws::elastic::LinearElastic {
+        young_modulus: 30e9,
+        poisson_ratio: 0.2,
+    };
+    // (law, committed state, strains of one step, whether each has a scale)
+    type Strains = Vec<(Vector6<f64>, [bool; 3])>;
+    let cases: Vec<(&dyn BulkLaw, BulkState, Strains)> = vec![
+        (
+            &law,
+            BulkState::default(),
+            vec![
+                (uniaxial(0.5), [true; 3]),
+                // loading past ε_D0: Consistent and Secant follow the strain
+                (uniaxial(1.5), [false, false, true]),
+                (uniaxial(-3.0), [true; 3]),
+            ],
+        ),
+        (
+            &law,
+            damaged,
+            vec![
+                (uniaxial(0.5), [true; 3]),
+                (uniaxial(1.0), [true; 3]),
+                (uniaxial(4.0), [false, false, true]),
+            ],
+        ),
+        (
+            &law,
+            impl_ex,
+            vec![
+                (uniaxial(0.5), [true; 3]),
+                (uniaxial(4.0), [true; 3]),
+                (uniaxial(-2.0), [true; 3]),
+            ],
+        ),
+        (
+            &steel,
+            BulkState::default(),
+            vec![
+                (bar(0.5), [true; 3]),
+                // yielding: only the consistent tangent is the elastoplastic one
+                (bar(2.0), [false, true, true]),
+            ],
+        ),
+        (
+            &elastic_law,
+            BulkState::default(),
+            vec![(uniaxial(3.0), [true; 3])],
+        ),
+    ];
+    let kinds = [
+        TangentKind::Consistent,
+        TangentKind::Secant,
+        TangentKind::Elastic,
+    ];
+    for (case, (law, committed, strains)) in cases.iter().enumerate() {
+        let c = law.elastic_stiffness();
+        for (k, kind) in kinds.into_iter().enumerate() {
+            let mut scale_of_step = None;
+            for (e, expected) in strains {
+                let r = law.step(committed, e, kind).unwrap();
+                assert_eq!(
+                    r.fixed_scale.is_some(),
+                    expected[k],
+                    "case {case}, {kind:?}, {e:?}"
+                );
+                if let Some(s) = r.fixed_scale {
+                    assert_eq!(r.tangent, c * s, "case {case}, {kind:?}, {e:?}");
+                    assert_eq!(*scale_of_step.get_or_insert(s), s, "case {case}, {kind:?}");
+                }
+            }
+        }
+    }
+}

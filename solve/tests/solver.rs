@@ -438,6 +438,7 @@ fn load_derivatives_match_finite_differences() {
             lower: Some(&mut k),
             upper: None,
             load: Some(&mut load),
+            kept_bulk: None,
         },
     )
     .unwrap();
@@ -1353,4 +1354,154 @@ fn debonded_frictionless_bar_ends_unloaded() {
     assert_eq!(peak_force, largest);
     assert!(force.abs() <= 1e-3 * peak_force, "{force} of {peak_force}");
     assert!(res.rows.last().unwrap().u_imposed < loading.u_final);
+}
+
+/// Kept element matrices (`assembly::KeptBulkMatrix`): along the iterates
+/// of one step, through Mazars points that start to damage and steel that
+/// yields (tets leaving the kept set), and after the start states change
+/// (IMPL-EX damage: every concrete tet kept), the assembled forces, lower
+/// and transposed values equal those of an assembly that builds every
+/// element matrix, to rounding.
+#[test]
+fn kept_element_matrices_assemble_the_full_tangent() {
+    use solve::assembly::KeptBulkMatrix;
+    use solve::laws::mazars::{CompressionSoftening, MazarsMaterial, TensionSoftening};
+    let m = slab_pullout(6);
+    let concrete: AnyBulkLaw = AnyBulkLaw::Mazars(
+        MazarsMaterial {
+            young_modulus: 30e9,
+            poisson_ratio: 0.2,
+            eps_d0: 1e-4,
+            shear_exponent: 1.06,
+            tension: TensionSoftening::Regularised {
+                fracture_energy: 80.0,
+            },
+            compression: CompressionSoftening::SizeFit,
+        }
+        .at_size(2e-3)
+        .unwrap(),
+    );
+    let steel: AnyBulkLaw = AnyBulkLaw::J2(J2 {
+        young_modulus: 200e9,
+        poisson_ratio: 0.3,
+        yield_stress: 40e6,
+    });
+    let f = fczm_table2();
+    let laws = ElementLaws::by_region(&m, concrete, steel, f.into(), None);
+    let active: Vec<bool> = laws.interfaces.iter().map(|l| l.is_some()).collect();
+    let loaded: Vec<usize> = m
+        .node_sets
+        .bar_loaded_end
+        .iter()
+        .map(|&n| 3 * n as usize + 2)
+        .collect();
+    let sys = System::new(&m, &loaded, &[], &active).unwrap();
+    let n = 3 * m.nodes.len();
+    // Pull the bar; the concrete next to it stretches with it.
+    let field = |amplitude: f64, wobble: f64| {
+        let mut u = vec![0.0; n];
+        for (i, (x, r)) in m.nodes.iter().zip(&m.node_region).enumerate() {
+            let z = x[2] / 16e-3;
+            u[3 * i + 2] = match r {
+                Region::Steel => amplitude * (1.0 + 0.5 * z),
+                Region::Concrete => 0.4 * amplitude * (1.0 - x[0] / 12e-3) * (1.0 + z),
+            };
+            u[3 * i] = wobble * amplitude * ((i % 7) as f64 - 3.0) / 3.0;
+        }
+        for &d in &loaded {
+            u[d] = 2.0 * amplitude;
+        }
+        u
+    };
+    let nnz = sys.nnz();
+    let assemble = |u: &[f64], start: &States, kept: Option<&mut KeptBulkMatrix>| {
+        let mut trial = start.clone();
+        let (mut f, mut lower, mut upper) = (vec![0.0; n], vec![0.0; nnz], vec![0.0; nnz]);
+        sys.evaluate(
+            &laws,
+            u,
+            start,
+            &mut trial,
+            Tangents::all(TangentKind::Consistent),
+            Outputs {
+                f_int: &mut f,
+                lower: Some(&mut lower),
+                upper: Some(&mut upper),
+                load: None,
+                kept_bulk: kept,
+            },
+        )
+        .unwrap();
+        (f, lower, upper, trial)
+    };
+    let mut kept = KeptBulkMatrix::default();
+    let close = |a: &[f64], b: &[f64], what: &str| {
+        let scale = b.iter().fold(0.0f64, |s, v| s.max(v.abs()));
+        let worst = a
+            .iter()
+            .zip(b)
+            .fold(0.0f64, |s, (x, y)| s.max((x - y).abs()));
+        assert!(worst <= 1e-13 * scale, "{what}: {worst:e} of {scale:e}");
+    };
+    let virgin = States::initial(&m);
+    let mut last_trial = None;
+    // The imposed DOFs fix the step: iterates differ only on the free DOFs.
+    for (amplitude, wobble, note) in [
+        (2e-6, 0.0, "elastic"),
+        (2e-6, 0.3, "same step, other iterate"),
+        (2e-6, 2.0, "same step, damaging and yielding iterate"),
+    ] {
+        let u = field(amplitude, wobble);
+        let (f0, l0, u0, t0) = assemble(&u, &virgin, None);
+        let (f1, l1, u1, t1) = assemble(&u, &virgin, Some(&mut kept));
+        assert_eq!(t0, t1, "{note}");
+        close(&f1, &f0, note);
+        close(&l1, &l0, note);
+        close(&u1, &u0, note);
+        last_trial = Some(t0);
+    }
+    let damaged = last_trial.unwrap();
+    let cracked = damaged.bulk.iter().filter(|s| s.damage > 0.0).count();
+    let yielded = damaged
+        .bulk
+        .iter()
+        .filter(|s| s.plastic_strain != [0.0; 6])
+        .count();
+    assert!(
+        cracked > 0 && yielded > 0,
+        "{cracked} cracked, {yielded} yielded"
+    );
+    // More tets cracked than were left out of the kept sum (none was cracked
+    // at the first iterate): kept tets left it within the step.
+    let kept_first = kept.kept_tets();
+    assert!(
+        cracked > m.tets.len() - kept_first,
+        "{kept_first} of {} kept, {cracked} cracked",
+        m.tets.len()
+    );
+    // A new step under IMPL-EX: every concrete tet's tangent is (1 − D̃) C.
+    let mut start = damaged.clone();
+    for (s, r) in start.bulk.iter_mut().zip(&m.tet_region) {
+        if *r == Region::Concrete {
+            s.explicit_damage = Some(s.damage);
+        }
+    }
+    for (amplitude, wobble) in [(3e-6, 0.5), (3e-6, 3.0)] {
+        let u = field(amplitude, wobble);
+        let (f0, l0, u0, _) = assemble(&u, &start, None);
+        let (f1, l1, u1, _) = assemble(&u, &start, Some(&mut kept));
+        close(&f1, &f0, "IMPL-EX step");
+        close(&l1, &l0, "IMPL-EX step");
+        close(&u1, &u0, "IMPL-EX step");
+    }
+    let concrete_tets = m
+        .tet_region
+        .iter()
+        .filter(|r| **r == Region::Concrete)
+        .count();
+    assert!(
+        kept.kept_tets() >= concrete_tets,
+        "{} kept",
+        kept.kept_tets()
+    );
 }

@@ -41,6 +41,10 @@ impl LinearElastic {
 }
 
 impl BulkLaw for LinearElastic {
+    fn elastic_stiffness(&self) -> Matrix6<f64> {
+        self.stiffness()
+    }
+
     fn step(
         &self,
         committed: &BulkState,
@@ -58,6 +62,7 @@ impl BulkLaw for LinearElastic {
             stress: tangent * strain,
             tangent,
             state: *committed,
+            fixed_scale: Some(1.0),
         })
     }
 }

@@ -58,6 +58,10 @@ impl J2 {
 }
 
 impl BulkLaw for J2 {
+    fn elastic_stiffness(&self) -> Matrix6<f64> {
+        self.stiffness()
+    }
+
     fn yield_stress(&self) -> Option<f64> {
         Some(self.yield_stress)
     }
@@ -93,6 +97,7 @@ impl BulkLaw for J2 {
         let radius = (2.0f64 / 3.0).sqrt() * self.yield_stress;
         let mut plastic = committed.plastic_strain;
         let mut tangent = c;
+        let mut fixed_scale = Some(1.0);
         if norm > radius {
             let n = s / norm;
             let dgamma = (norm - radius) / (2.0 * g);
@@ -112,6 +117,7 @@ impl BulkLaw for J2 {
                     t[(i + 3, i + 3)] = g * theta;
                 }
                 tangent = t - n * n.transpose() * (2.0 * g * theta);
+                fixed_scale = None;
             }
         }
         let p = k * tr;
@@ -125,6 +131,7 @@ impl BulkLaw for J2 {
                 plastic_strain: plastic,
                 ..*committed
             },
+            fixed_scale,
         })
     }
 }

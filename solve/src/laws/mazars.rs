@@ -292,6 +292,10 @@ impl Mazars {
 }
 
 impl BulkLaw for Mazars {
+    fn elastic_stiffness(&self) -> Matrix6<f64> {
+        self.stiffness()
+    }
+
     /// κ̃ = κ + ratio·Δκ and D̃ = max(D, D(κ̃, α_t)) with the last α_t:
     /// extrapolating κ rather than D follows the shape of the softening
     /// law (D jumps at the threshold and saturates towards 1).
@@ -332,6 +336,7 @@ impl BulkLaw for Mazars {
                         kappa_increment: 0.0,
                         ..*committed
                     },
+                    fixed_scale: Some(1.0),
                 });
             }
         }
@@ -357,6 +362,13 @@ impl BulkLaw for Mazars {
         // integrated implicitly, for the next extrapolation.
         let d_stress = committed.explicit_damage.unwrap_or(d);
         let stress = effective * (1.0 - d_stress);
+        // The secant of the committed or extrapolated damage does not move
+        // with the strain; a growing implicit damage does.
+        let fixed_scale = match kind {
+            TangentKind::Elastic => Some(1.0),
+            _ if committed.explicit_damage.is_some() || !grows => Some(1.0 - d_stress),
+            _ => None,
+        };
         let tangent = match kind {
             TangentKind::Elastic => c,
             TangentKind::Secant => c * (1.0 - d_stress),
@@ -404,6 +416,7 @@ impl BulkLaw for Mazars {
                 alpha_t,
                 ..*committed
             },
+            fixed_scale,
         })
     }
 }

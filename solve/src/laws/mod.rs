@@ -77,6 +77,12 @@ pub struct BulkResponse {
     pub stress: Vector6<f64>,
     pub tangent: Matrix6<f64>,
     pub state: BulkState,
+    /// `Some(s)` when `tangent` is exactly s × [`BulkLaw::elastic_stiffness`]
+    /// with s fixed by the committed state and the tangent kind, not by this
+    /// strain (an elastic point, an unloading or IMPL-EX Mazars point): the
+    /// element matrix then holds for every iterate of the step while the
+    /// point stays so, and the assembly keeps it instead of rebuilding it.
+    pub fixed_scale: Option<f64>,
 }
 
 /// Committed history of one interface integration point.
@@ -106,6 +112,9 @@ pub trait BulkLaw: Sync {
         strain: &Vector6<f64>,
         kind: TangentKind,
     ) -> Result<BulkResponse, LawError>;
+
+    /// The stiffness that [`BulkResponse::fixed_scale`] scales, Pa.
+    fn elastic_stiffness(&self) -> Matrix6<f64>;
 
     /// IMPL-EX: the committed state prepared for a step `ratio` times as
     /// long as the one that produced it (`explicit_damage` set); laws
@@ -273,6 +282,14 @@ impl BulkLaw for AnyBulkLaw {
             AnyBulkLaw::Mazars(l) => l.step(committed, strain, kind),
             AnyBulkLaw::J2(l) => l.step(committed, strain, kind),
             AnyBulkLaw::Elastic(l) => l.step(committed, strain, kind),
+        }
+    }
+
+    fn elastic_stiffness(&self) -> Matrix6<f64> {
+        match self {
+            AnyBulkLaw::Mazars(l) => l.stiffness(),
+            AnyBulkLaw::J2(l) => l.stiffness(),
+            AnyBulkLaw::Elastic(l) => l.stiffness(),
         }
     }
 

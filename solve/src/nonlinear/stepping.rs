@@ -16,7 +16,7 @@ use super::report::{
 };
 use super::workspace::{reaction_norm, residual, LinearState, Workspace};
 use crate::assembly::{
-    AssemblyError, ElementLaws, LoadDerivatives, Outputs, States, System, Tangents,
+    AssemblyError, ElementLaws, KeptBulkMatrix, LoadDerivatives, Outputs, States, System, Tangents,
 };
 use crate::laws::{BulkLaw, TangentKind};
 use crate::linalg::norm;
@@ -239,6 +239,7 @@ impl<'a> Driver<'a> {
                 Vec::new()
             },
             load: None,
+            kept_bulk: KeptBulkMatrix::default(),
             constraint_row: Vec::new(),
             lin,
             force_floor: 0.0,

@@ -4,7 +4,8 @@
 
 use super::summary::WallTimes;
 use crate::assembly::{
-    AssemblyError, DofMap, ElementLaws, LoadDerivatives, Outputs, States, System, Tangents,
+    AssemblyError, DofMap, ElementLaws, KeptBulkMatrix, LoadDerivatives, Outputs, States, System,
+    Tangents,
 };
 use crate::linalg::amg::{AmgError, AmgParams};
 use crate::linalg::multigrid::{FreeDofMultigrid, NodeBlockLayout};
@@ -28,6 +29,8 @@ pub(crate) struct Workspace<'a> {
     /// Derivatives in λ of the current iterate, under path-following
     /// control; `None` otherwise.
     pub(crate) load: Option<LoadDerivatives>,
+    /// The tets' element matrices kept within a step.
+    pub(crate) kept_bulk: KeptBulkMatrix,
     /// Scratch for the constraint's gradient on the free DOFs.
     pub(crate) constraint_row: Vec<f64>,
     pub(crate) lin: LinearState,
@@ -59,6 +62,7 @@ impl Workspace<'_> {
                 lower: Some(&mut self.lower),
                 upper,
                 load: self.load.as_mut(),
+                kept_bulk: Some(&mut self.kept_bulk),
             },
         )?;
         self.wall.add_eval(&t);
