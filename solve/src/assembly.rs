@@ -377,13 +377,6 @@ pub struct KeptBulkMatrix {
     scale: Vec<f64>,
 }
 
-impl KeptBulkMatrix {
-    /// Number of tets whose matrix is in the kept sum.
-    pub fn kept_tets(&self) -> usize {
-        self.scale.iter().filter(|s| !s.is_nan()).count()
-    }
-}
-
 /// What an evaluation does with one tet's element matrix.
 #[derive(Debug, Clone, Copy, PartialEq)]
 enum TetMatrix {
@@ -404,6 +397,70 @@ enum MatrixReuse {
     Build,
     /// The kept sum holds for this evaluation.
     Reuse,
+}
+
+impl KeptBulkMatrix {
+    /// Number of tets whose matrix is in the kept sum.
+    pub fn kept_tets(&self) -> usize {
+        self.scale.iter().filter(|s| !s.is_nan()).count()
+    }
+
+    /// How this evaluation uses the kept sum: as it is when `fingerprint`
+    /// is the one it was built for, else emptied to be built again.
+    fn prepare(&mut self, fingerprint: u64, nnz: usize, n_tets: usize) -> MatrixReuse {
+        if self.fingerprint == Some(fingerprint) {
+            return MatrixReuse::Reuse;
+        }
+        self.fingerprint = Some(fingerprint);
+        self.values.clear();
+        self.values.resize(nnz, 0.0);
+        self.scale.clear();
+        self.scale.resize(n_tets, f64::NAN);
+        MatrixReuse::Build
+    }
+
+    /// Adds the kept sum to the lower values and to the transposed ones:
+    /// the kept matrices are symmetric (scaled elastic stiffnesses).
+    fn add_into(&self, lower: &mut [f64], upper: Option<&mut [f64]>) {
+        lower
+            .par_iter_mut()
+            .zip(&self.values)
+            .for_each(|(a, b)| *a += b);
+        if let Some(up) = upper {
+            up.par_iter_mut()
+                .zip(&self.values)
+                .for_each(|(a, b)| *a += b);
+        }
+    }
+}
+
+/// One tet's element matrix for the response `r` into `k`, unless it is
+/// already in the kept sum (`kept`: the scale it was kept with, NaN if
+/// not); a kept tet whose tangent has moved gets the difference.
+fn tet_matrix(
+    g: &TetGeometry,
+    law: &AnyBulkLaw,
+    r: &crate::laws::BulkResponse,
+    reuse: MatrixReuse,
+    kept: f64,
+    k: &mut [f64; 144],
+) -> TetMatrix {
+    let action = match reuse {
+        MatrixReuse::Off => TetMatrix::Scatter,
+        MatrixReuse::Build => r.fixed_scale.map_or(TetMatrix::Scatter, TetMatrix::Keep),
+        MatrixReuse::Reuse if r.fixed_scale.map(f64::to_bits) == Some(kept.to_bits()) => {
+            return TetMatrix::Kept;
+        }
+        MatrixReuse::Reuse => TetMatrix::Scatter,
+    };
+    g.stiffness(&r.tangent, k);
+    if reuse == MatrixReuse::Reuse && !kept.is_nan() {
+        // Left the kept tangent: its kept matrix comes off.
+        let mut k_kept = [0.0; 144];
+        g.stiffness(&(law.elastic_stiffness() * kept), &mut k_kept);
+        k.iter_mut().zip(&k_kept).for_each(|(a, b)| *a -= b);
+    }
+    action
 }
 
 /// SplitMix64's finaliser over `state ⊕ value`: the fingerprint's mixing.
@@ -582,27 +639,18 @@ impl System {
             .filter(|_| want_k && load.is_none());
         let reuse = match kept.as_deref_mut() {
             None => MatrixReuse::Off,
-            Some(k) => {
-                let fingerprint = self.kept_fingerprint(laws, committed, bulk_kind, u);
-                if k.fingerprint == Some(fingerprint) {
-                    MatrixReuse::Reuse
-                } else {
-                    k.fingerprint = Some(fingerprint);
-                    k.values.clear();
-                    k.values.resize(self.row_idx.len(), 0.0);
-                    k.scale.clear();
-                    k.scale.resize(self.tets.len(), f64::NAN);
-                    MatrixReuse::Build
-                }
-            }
+            Some(k) => k.prepare(
+                self.kept_fingerprint(laws, committed, bulk_kind, u),
+                self.row_idx.len(),
+                self.tets.len(),
+            ),
         };
         let mut actions = vec![TetMatrix::Scatter; BLOCK.min(self.tets.len())];
         let mut fbuf = vec![[0.0f64; 12]; BLOCK.min(self.tets.len())];
         let mut kbuf = vec![[0.0f64; 144]; if want_k { fbuf.len() } else { 0 }];
-        let n_tets = self.tets.len();
         let mut start = 0;
-        while start < n_tets {
-            let end = (start + BLOCK).min(n_tets);
+        while start < self.tets.len() {
+            let end = (start + BLOCK).min(self.tets.len());
             let len = end - start;
             let t0 = Instant::now();
             let states = &mut trial.bulk[start..end];
@@ -638,35 +686,8 @@ impl System {
                             what: "tangent",
                         });
                     }
-                    *action = match reuse {
-                        MatrixReuse::Off => TetMatrix::Scatter,
-                        MatrixReuse::Build => {
-                            r.fixed_scale.map_or(TetMatrix::Scatter, TetMatrix::Keep)
-                        }
-                        MatrixReuse::Reuse => {
-                            let kept = kept_scale[off];
-                            if r.fixed_scale.map(f64::to_bits) == Some(kept.to_bits()) {
-                                TetMatrix::Kept
-                            } else {
-                                TetMatrix::Scatter
-                            }
-                        }
-                    };
-                    if *action != TetMatrix::Kept {
-                        g.stiffness(&r.tangent, k);
-                    }
-                    if reuse == MatrixReuse::Reuse && *action == TetMatrix::Scatter {
-                        let kept = kept_scale[off];
-                        if !kept.is_nan() {
-                            // Left the kept tangent: its kept matrix comes off.
-                            let mut k_kept = [0.0; 144];
-                            g.stiffness(
-                                &(laws.tets[index].elastic_stiffness() * kept),
-                                &mut k_kept,
-                            );
-                            k.iter_mut().zip(&k_kept).for_each(|(a, b)| *a -= b);
-                        }
-                    }
+                    let kept = kept_scale.get(off).copied().unwrap_or(f64::NAN);
+                    *action = tet_matrix(g, &laws.tets[index], &r, reuse, kept, k);
                 }
                 Ok(())
             };
@@ -687,16 +708,7 @@ impl System {
             timings.constitutive += t0.elapsed().as_secs_f64();
             let t1 = Instant::now();
             if let Some(l) = load.as_deref_mut() {
-                let first = self
-                    .tet_load
-                    .partition_point(|e| (e.element as usize) < start);
-                for e in self.tet_load[first..]
-                    .iter()
-                    .take_while(|e| (e.element as usize) < end)
-                {
-                    let k = &kbuf[e.element as usize - start];
-                    l.add(e, k[12 * e.row as usize + e.col as usize]);
-                }
+                self.add_tet_load(l, start, &kbuf[..len]);
             }
             for off in 0..len {
                 let index = start + off;
@@ -720,17 +732,27 @@ impl System {
             start = end;
         }
         if let (Some(k), Some(m)) = (kept, matrix) {
-            // The kept matrices are symmetric (a scaled elastic stiffness):
-            // the same values serve the transposed entries.
             let t1 = Instant::now();
-            m.par_iter_mut().zip(&k.values).for_each(|(a, b)| *a += b);
-            if let Some(up) = upper {
-                up.par_iter_mut().zip(&k.values).for_each(|(a, b)| *a += b);
-            }
+            k.add_into(m, upper);
             timings.assembly += t1.elapsed().as_secs_f64();
         }
 
         Ok(())
+    }
+
+    /// The load-derivative entries of the tets from `start` on, whose
+    /// element matrices are `kbuf`.
+    fn add_tet_load(&self, load: &mut LoadDerivatives, start: usize, kbuf: &[[f64; 144]]) {
+        let first = self
+            .tet_load
+            .partition_point(|e| (e.element as usize) < start);
+        for e in self.tet_load[first..]
+            .iter()
+            .take_while(|e| (e.element as usize) < start + kbuf.len())
+        {
+            let k = &kbuf[e.element as usize - start];
+            load.add(e, k[12 * e.row as usize + e.col as usize]);
+        }
     }
 
     /// The interface elements' part of [`System::evaluate`]: few compared
