@@ -67,6 +67,8 @@ impl SolverKind {
 struct Job {
     model: PathBuf,
     solver: SolverKind,
+    /// Worker threads of the solve (`RAYON_NUM_THREADS`); `None`: all cores.
+    threads: Option<usize>,
     u_imposed: f64,
     concrete: LinearElastic,
     steel: LinearElastic,
@@ -117,16 +119,16 @@ fn linear_child(job: &str) -> Result<ExitCode> {
 }
 
 /// Exit, wall time (s) and peak resident memory (bytes) of a child.
-struct Measured {
-    success: bool,
-    timed_out: bool,
-    wall: f64,
-    max_rss: u64,
+pub(crate) struct Measured {
+    pub(crate) success: bool,
+    pub(crate) timed_out: bool,
+    pub(crate) wall: f64,
+    pub(crate) max_rss: u64,
 }
 
 /// Waits for `child` (at most `timeout` s, then kills it) and measures it
 /// with wait4's rusage: the peak resident set of that process alone.
-fn wait_measured(
+pub(crate) fn wait_measured(
     child: &mut std::process::Child,
     start: Instant,
     timeout: f64,
@@ -179,7 +181,11 @@ struct Row {
 fn run_ribbar_child(job: &Job, printer: &Printer) -> Result<(ChildResult, Measured)> {
     let exe = crate::child::self_exe()?;
     let start = Instant::now();
-    let mut child = Command::new(exe)
+    let mut command = Command::new(exe);
+    if let Some(n) = job.threads {
+        command.env("RAYON_NUM_THREADS", n.to_string());
+    }
+    let mut child = command
         .args(["bench", "linear"])
         .env(JOB_ENV, serde_json::to_string(job)?)
         .stdin(Stdio::null())
@@ -275,15 +281,21 @@ fn linear(args: &BenchArgs, printer: &Printer) -> Result<ExitCode> {
         } else {
             "quarter"
         };
-        let solvers: &[SolverKind] = if symmetry == "full" {
-            &[SolverKind::Cholesky, SolverKind::AmgCg]
+        // The AMG also on one thread, as PETSc runs (one process).
+        let solvers: &[(SolverKind, Option<usize>)] = if symmetry == "full" {
+            &[
+                (SolverKind::Cholesky, None),
+                (SolverKind::AmgCg, None),
+                (SolverKind::AmgCg, Some(1)),
+            ]
         } else {
-            &[SolverKind::AmgCg]
+            &[(SolverKind::AmgCg, None)]
         };
-        for &solver in solvers {
+        for &(solver, threads) in solvers {
             let job = Job {
                 model: model_path.clone(),
                 solver,
+                threads,
                 u_imposed: U_IMPOSED,
                 concrete,
                 steel,
@@ -340,7 +352,56 @@ fn linear(args: &BenchArgs, printer: &Printer) -> Result<ExitCode> {
                     notes.push(format!("CalculiX failed: {e:#}"));
                 }
             }
+            let dir = work.join("bench-linear-petsc");
+            match crate::bench_petsc::run(
+                &problem,
+                &concrete,
+                &steel,
+                CG_TOLERANCE,
+                &dir,
+                TIMEOUT,
+                printer,
+            ) {
+                Ok(Some(p)) => rows.push(Row {
+                    model: label,
+                    h_interface: h,
+                    dofs: problem.free_dofs(),
+                    solver: format!("PETSc {}: CG + GAMG", p.version),
+                    threads: 1,
+                    wall: p.measured.wall,
+                    phases: p.phases,
+                    max_rss: p.measured.max_rss,
+                    iterations: Some(p.iterations),
+                    reaction: p.reaction,
+                }),
+                Ok(None) => notes.push(
+                    "petsc4py is not installed (Debian package python3-petsc4py): no PETSc row."
+                        .into(),
+                ),
+                Err(e) => {
+                    printer.line(&format!("PETSc: {e:#}"));
+                    notes.push(format!("PETSc failed: {e:#}"));
+                }
+            }
         }
+    }
+    let full_row = |prefix: &str| {
+        rows.iter()
+            .find(|r| r.model == "full" && r.solver.starts_with(prefix))
+    };
+    if let (Some(p), Some(a)) = (full_row("PETSc"), full_row(SolverKind::AmgCg.label())) {
+        notes.push(format!(
+            "PETSc's reaction against ribbar's AMG (same system, CG to {CG_TOLERANCE:e}): \
+             {:+.2e} relative; wall time ribbar AMG / PETSc: {:.2} ({} threads), {:.2} (1 thread).",
+            (p.reaction - a.reaction) / a.reaction.abs(),
+            a.wall / p.wall,
+            a.threads,
+            rows.iter()
+                .filter(|r| r.model == "full" && r.threads == 1 && r.solver == a.solver)
+                .map(|r| r.wall / p.wall)
+                .next()
+                .unwrap_or(f64::NAN)
+        ));
     }
     let table = linear_table(&rows, ccx_force, &notes, args);
     std::fs::create_dir_all(&args.out)

@@ -3,6 +3,7 @@
 
 pub mod app;
 pub mod bench;
+mod bench_petsc;
 pub mod bench_series;
 pub mod child;
 pub mod cli;

@@ -19,7 +19,8 @@ fn ccx_installed() -> bool {
 
 /// Issue 7: the perfect-bond benchmark writes its table with every ribbar
 /// solver, and when `ccx` is installed the reaction forces agree with
-/// CalculiX's within 0.5 %.
+/// CalculiX's within 0.5 %; with petsc4py, PETSc's GAMG gives ribbar's AMG
+/// reaction within 1e-6.
 #[test]
 fn bench_linear_table_and_agreement_with_calculix() {
     let tmp = std::env::temp_dir().join(format!("ribbar-bench-linear-{}", std::process::id()));
@@ -76,6 +77,26 @@ fn bench_linear_table_and_agreement_with_calculix() {
         }
     } else {
         assert!(table.contains("not installed"), "{table}");
+    }
+    // PETSc's CG + GAMG solves the system ribbar's AMG solves: the same
+    // reaction to the CG tolerance, when petsc4py is there at all.
+    match full.iter().find(|r| r[4].starts_with("PETSc")) {
+        Some(petsc) => {
+            let amg = full
+                .iter()
+                .find(|r| r[4].contains("AMG"))
+                .expect("an AMG row");
+            let rel = (force(petsc) - force(amg)).abs() / force(amg);
+            assert!(rel < 1e-6, "PETSc vs ribbar's AMG: {rel:e}\n{table}");
+            assert!(
+                table.contains("PETSc's reaction against ribbar's AMG"),
+                "{table}"
+            );
+        }
+        None => assert!(
+            table.contains("petsc4py is not installed"),
+            "no PETSc row and no reason:\n{table}"
+        ),
     }
     let _ = std::fs::remove_dir_all(&tmp);
 }
