@@ -10,6 +10,7 @@
 
 use crate::cli::{BenchArgs, BenchKind};
 use crate::commands::run_scene;
+use crate::measure::{wait_measured, Measured};
 use crate::progress::Printer;
 use crate::scene::Scene;
 use anyhow::{bail, Context, Result};
@@ -23,7 +24,7 @@ use std::fmt::Write as _;
 use std::io::Read;
 use std::path::{Path, PathBuf};
 use std::process::{Command, ExitCode, Stdio};
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 pub fn run(args: &BenchArgs, printer: &Printer) -> Result<ExitCode> {
     match args.kind {
@@ -116,52 +117,6 @@ fn linear_child(job: &str) -> Result<ExitCode> {
     };
     println!("{}", serde_json::to_string(&out)?);
     Ok(ExitCode::SUCCESS)
-}
-
-/// Exit, wall time (s) and peak resident memory (bytes) of a child.
-pub(crate) struct Measured {
-    pub(crate) success: bool,
-    pub(crate) timed_out: bool,
-    pub(crate) wall: f64,
-    pub(crate) max_rss: u64,
-}
-
-/// Waits for `child` (at most `timeout` s, then kills it) and measures it
-/// with wait4's rusage: the peak resident set of that process alone.
-pub(crate) fn wait_measured(
-    child: &mut std::process::Child,
-    start: Instant,
-    timeout: f64,
-) -> Result<Measured> {
-    let pid = child.id() as libc::pid_t;
-    let mut status: libc::c_int = 0;
-    // SAFETY: rusage is plain data; wait4 writes it and the status.
-    let mut usage: libc::rusage = unsafe { std::mem::zeroed() };
-    let mut timed_out = false;
-    loop {
-        // SAFETY: pid is our own child, not yet reaped (std's Child is
-        // never waited on afterwards).
-        let r = unsafe { libc::wait4(pid, &mut status, libc::WNOHANG, &mut usage) };
-        if r == pid {
-            break;
-        }
-        if r < 0 {
-            bail!("wait4 on child {pid}: {}", std::io::Error::last_os_error());
-        }
-        if !timed_out && start.elapsed().as_secs_f64() > timeout {
-            timed_out = true;
-            let _ = child.kill();
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    }
-    let wall = start.elapsed().as_secs_f64();
-    Ok(Measured {
-        success: !timed_out && libc::WIFEXITED(status) && libc::WEXITSTATUS(status) == 0,
-        timed_out,
-        wall,
-        // ru_maxrss is in KiB on Linux.
-        max_rss: usage.ru_maxrss.max(0) as u64 * 1024,
-    })
 }
 
 /// One row of the table.
@@ -323,66 +278,15 @@ fn linear(args: &BenchArgs, printer: &Printer) -> Result<ExitCode> {
             }
         }
         if symmetry == "full" {
-            let model = Model::load(&model_path)?;
-            let problem = PerfectBond::from_model(&model, U_IMPOSED)?;
-            drop(model);
-            let dir = work.join("bench-linear-ccx");
-            match ccx::run(&problem, &concrete, &steel, &dir, TIMEOUT, printer) {
-                Ok(Some(c)) => {
-                    ccx_force = Some(c.reaction);
-                    rows.push(Row {
-                        model: label,
-                        h_interface: h,
-                        dofs: problem.free_dofs(),
-                        solver: format!("CalculiX ccx {} (C3D4)", c.version),
-                        threads: c.threads,
-                        wall: c.wall,
-                        phases: "whole run (input, SPOOLES solve, output)".into(),
-                        max_rss: c.max_rss,
-                        iterations: None,
-                        reaction: c.reaction,
-                    });
-                }
-                Ok(None) => notes.push(
-                    "CalculiX `ccx` is not installed (Debian package calculix-ccx): ribbar alone."
-                        .into(),
-                ),
-                Err(e) => {
-                    printer.line(&format!("ccx: {e:#}"));
-                    notes.push(format!("CalculiX failed: {e:#}"));
-                }
-            }
-            let dir = work.join("bench-linear-petsc");
-            match crate::bench_petsc::run(
-                &problem,
-                &concrete,
-                &steel,
-                CG_TOLERANCE,
-                &dir,
-                TIMEOUT,
-                printer,
-            ) {
-                Ok(Some(p)) => rows.push(Row {
-                    model: label,
-                    h_interface: h,
-                    dofs: problem.free_dofs(),
-                    solver: format!("PETSc {}: CG + GAMG", p.version),
-                    threads: 1,
-                    wall: p.measured.wall,
-                    phases: p.phases,
-                    max_rss: p.measured.max_rss,
-                    iterations: Some(p.iterations),
-                    reaction: p.reaction,
-                }),
-                Ok(None) => notes.push(
-                    "petsc4py is not installed (Debian package python3-petsc4py): no PETSc row."
-                        .into(),
-                ),
-                Err(e) => {
-                    printer.line(&format!("PETSc: {e:#}"));
-                    notes.push(format!("PETSc failed: {e:#}"));
-                }
-            }
+            let peers = Peers {
+                work: &work,
+                model_path: &model_path,
+                label,
+                h,
+                concrete: &concrete,
+                steel: &steel,
+            };
+            ccx_force = peer_rows(&peers, &mut rows, &mut notes, printer)?;
         }
     }
     let full_row = |prefix: &str| {
@@ -419,6 +323,86 @@ fn linear(args: &BenchArgs, printer: &Printer) -> Result<ExitCode> {
         bail!("no solve succeeded");
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// The full model's external peers of one bench run.
+struct Peers<'a> {
+    work: &'a Path,
+    model_path: &'a Path,
+    label: &'static str,
+    h: f64,
+    concrete: &'a LinearElastic,
+    steel: &'a LinearElastic,
+}
+
+/// CalculiX and PETSc on the full model: their rows, or a note saying why
+/// not; returns CalculiX's reaction, the table's reference.
+fn peer_rows(
+    p: &Peers<'_>,
+    rows: &mut Vec<Row>,
+    notes: &mut Vec<String>,
+    printer: &Printer,
+) -> Result<Option<f64>> {
+    let mut ccx_force = None;
+    let model = Model::load(p.model_path)?;
+    let problem = PerfectBond::from_model(&model, U_IMPOSED)?;
+    drop(model);
+    let dir = p.work.join("bench-linear-ccx");
+    match ccx::run(&problem, p.concrete, p.steel, &dir, TIMEOUT, printer) {
+        Ok(Some(c)) => {
+            ccx_force = Some(c.reaction);
+            rows.push(Row {
+                model: p.label,
+                h_interface: p.h,
+                dofs: problem.free_dofs(),
+                solver: format!("CalculiX ccx {} (C3D4)", c.version),
+                threads: c.threads,
+                wall: c.wall,
+                phases: "whole run (input, SPOOLES solve, output)".into(),
+                max_rss: c.max_rss,
+                iterations: None,
+                reaction: c.reaction,
+            });
+        }
+        Ok(None) => notes.push(
+            "CalculiX `ccx` is not installed (Debian package calculix-ccx): ribbar alone.".into(),
+        ),
+        Err(e) => {
+            printer.line(&format!("ccx: {e:#}"));
+            notes.push(format!("CalculiX failed: {e:#}"));
+        }
+    }
+    let dir = p.work.join("bench-linear-petsc");
+    match crate::bench_petsc::run(
+        &problem,
+        p.concrete,
+        p.steel,
+        CG_TOLERANCE,
+        &dir,
+        TIMEOUT,
+        printer,
+    ) {
+        Ok(Some(r)) => rows.push(Row {
+            model: p.label,
+            h_interface: p.h,
+            dofs: problem.free_dofs(),
+            solver: format!("PETSc {}: CG + GAMG", r.version),
+            threads: 1,
+            wall: r.measured.wall,
+            phases: r.phases,
+            max_rss: r.measured.max_rss,
+            iterations: Some(r.iterations),
+            reaction: r.reaction,
+        }),
+        Ok(None) => notes.push(
+            "petsc4py is not installed (Debian package python3-petsc4py): no PETSc row.".into(),
+        ),
+        Err(e) => {
+            printer.line(&format!("PETSc: {e:#}"));
+            notes.push(format!("PETSc failed: {e:#}"));
+        }
+    }
+    Ok(ccx_force)
 }
 
 fn linear_table(
@@ -483,7 +467,8 @@ fn linear_table(
 
 /// CalculiX: the same problem as an Abaqus-format input, run and parsed.
 mod ccx {
-    use super::{wait_measured, Printer};
+    use super::Printer;
+    use crate::measure::wait_measured;
     use anyhow::{bail, Context, Result};
     use solve::laws::elastic::LinearElastic;
     use solve::problems::linear_elastic::PerfectBond;

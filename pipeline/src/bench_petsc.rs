@@ -5,7 +5,7 @@
 //! the reaction is computed by ribbar from PETSc's displacements, as for its
 //! own solvers.
 
-use crate::bench::{wait_measured, Measured};
+use crate::measure::{wait_measured, Measured};
 use crate::progress::Printer;
 use anyhow::{bail, Context, Result};
 use solve::laws::elastic::LinearElastic;

@@ -8,6 +8,7 @@ pub mod bench_series;
 pub mod child;
 pub mod cli;
 pub mod commands;
+mod measure;
 pub mod outputs;
 pub mod overrides;
 pub mod post;
