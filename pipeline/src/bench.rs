@@ -2,8 +2,9 @@
 //! plots (see docs/performance.md).
 //!
 //! `ribbar bench linear`: the linear-elastic perfect-bond pull-out of
-//! smooth-80 (SPEC §9) solved by each of ribbar's linear solvers and by
-//! CalculiX `ccx` on the same nodes and tetrahedra. Every solve runs in its
+//! smooth-80 (SPEC §9) solved by each of ribbar's linear solvers, by
+//! CalculiX `ccx` on the same nodes and tetrahedra and by PETSc's CG + GAMG
+//! on ribbar's own system (`bench_petsc`). Every solve runs in its
 //! own child process (ribbar re-invoked with a job in the environment), so
 //! its wall time and peak resident memory (`wait4` rusage) are those of the
 //! whole solve process, as SPEC §9 measured the peers.
