@@ -469,14 +469,13 @@ fn linear_table(
 /// CalculiX: the same problem as an Abaqus-format input, run and parsed.
 mod ccx {
     use super::Printer;
-    use crate::measure::wait_measured;
-    use anyhow::{bail, Context, Result};
+    use crate::measure::run_logged;
+    use anyhow::{Context, Result};
     use solve::laws::elastic::LinearElastic;
     use solve::problems::linear_elastic::PerfectBond;
     use std::fmt::Write as _;
     use std::path::Path;
-    use std::process::{Command, Stdio};
-    use std::time::Instant;
+    use std::process::Command;
 
     pub struct CcxResult {
         pub reaction: f64,
@@ -603,32 +602,21 @@ mod ccx {
         let threads = std::thread::available_parallelism()
             .map(|n| n.get())
             .unwrap_or(1);
-        let log = std::fs::File::create(dir.join("ccx.log")).context("creating ccx.log")?;
         printer.line(&format!(
             "CalculiX: {} nodes, {} tets",
             p.nodes.len(),
             p.tets.len()
         ));
-        let start = Instant::now();
-        let mut child = Command::new(&exe)
-            .arg(JOB)
-            .current_dir(dir)
-            .env("OMP_NUM_THREADS", threads.to_string())
-            .env("CCX_NPROC_EQUATION_SOLVER", threads.to_string())
-            .stdin(Stdio::null())
-            .stdout(log.try_clone().context("ccx.log")?)
-            .stderr(log)
-            .spawn()
-            .with_context(|| format!("starting {}", exe.display()))?;
-        let m = wait_measured(&mut child, start, timeout)?;
-        if !m.success {
-            bail!(
-                "ccx {} after {:.1} s (see {})",
-                if m.timed_out { "timed out" } else { "failed" },
-                m.wall,
-                dir.join("ccx.log").display()
-            );
-        }
+        let m = run_logged(
+            Command::new(&exe)
+                .arg(JOB)
+                .current_dir(dir)
+                .env("OMP_NUM_THREADS", threads.to_string())
+                .env("CCX_NPROC_EQUATION_SOLVER", threads.to_string()),
+            &format!("ccx ({})", exe.display()),
+            &dir.join("ccx.log"),
+            timeout,
+        )?;
         let text =
             std::fs::read_to_string(&dat).with_context(|| format!("reading {}", dat.display()))?;
         let reaction = parse_total_fz(&text)

@@ -5,7 +5,7 @@
 //! the reaction is computed by ribbar from PETSc's displacements, as for its
 //! own solvers.
 
-use crate::measure::{wait_measured, Measured};
+use crate::measure::{run_logged, Measured};
 use crate::progress::Printer;
 use anyhow::{bail, Context, Result};
 use solve::laws::elastic::LinearElastic;
@@ -13,7 +13,6 @@ use solve::linalg::amg::Bsr;
 use solve::problems::linear_elastic::{apply_dirichlet, assemble, reaction, PerfectBond};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
-use std::time::Instant;
 
 const SCRIPT: &str = include_str!("../../scripts/petsc-gamg.py");
 
@@ -136,29 +135,12 @@ pub(crate) fn run(
     std::fs::write(dir.join("system.json"), meta.to_string()).context("writing system.json")?;
     drop((indptr, indices, values, coords));
     printer.line(&format!("PETSc: {} DOFs, CG + GAMG", rhs.len()));
-    let log = std::fs::File::create(dir.join("petsc.log")).context("creating petsc.log")?;
-    let start = Instant::now();
-    let mut child = Command::new(&python)
-        .arg(&script)
-        .arg(dir)
-        .stdin(Stdio::null())
-        .stdout(log.try_clone().context("petsc.log")?)
-        .stderr(log)
-        .spawn()
-        .with_context(|| format!("starting {}", python.display()))?;
-    let measured = wait_measured(&mut child, start, timeout)?;
-    if !measured.success {
-        bail!(
-            "PETSc failed{} after {:.1} s (see {})",
-            if measured.timed_out {
-                " (timed out)"
-            } else {
-                ""
-            },
-            measured.wall,
-            dir.join("petsc.log").display()
-        );
-    }
+    let measured = run_logged(
+        Command::new(&python).arg(&script).arg(dir),
+        &format!("PETSc ({})", python.display()),
+        &dir.join("petsc.log"),
+        timeout,
+    )?;
     let r: ScriptResult = serde_json::from_str(
         &std::fs::read_to_string(dir.join("result.json")).context("reading result.json")?,
     )

@@ -1,7 +1,9 @@
 //! Wall time and peak resident memory of a child process (wait4 rusage),
 //! with a timeout: how the benchmarks measure every solve they start.
 
-use anyhow::{bail, Result};
+use anyhow::{bail, Context, Result};
+use std::path::Path;
+use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
 /// Exit, wall time (s) and peak resident memory (bytes) of a child.
@@ -48,4 +50,36 @@ pub(crate) fn wait_measured(
         // ru_maxrss is in KiB on Linux.
         max_rss: usage.ru_maxrss.max(0) as u64 * 1024,
     })
+}
+
+/// Runs `command` with its output in the file `log`, measured, at most
+/// `timeout` s; an error naming `name` and the log when it fails or times
+/// out.
+pub(crate) fn run_logged(
+    command: &mut Command,
+    name: &str,
+    log: &Path,
+    timeout: f64,
+) -> Result<Measured> {
+    let file = std::fs::File::create(log).with_context(|| format!("creating {}", log.display()))?;
+    let start = Instant::now();
+    let mut child = command
+        .stdin(Stdio::null())
+        .stdout(
+            file.try_clone()
+                .with_context(|| log.display().to_string())?,
+        )
+        .stderr(file)
+        .spawn()
+        .with_context(|| format!("starting {name}"))?;
+    let m = wait_measured(&mut child, start, timeout)?;
+    if !m.success {
+        bail!(
+            "{name} {} after {:.1} s (see {})",
+            if m.timed_out { "timed out" } else { "failed" },
+            m.wall,
+            log.display()
+        );
+    }
+    Ok(m)
 }
