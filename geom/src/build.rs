@@ -48,7 +48,7 @@ impl Check {
 /// quarter runs compare.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct GeometryReport {
-    /// The modelled part: `"full"` or `"quarter"` (x ≥ 0, y ≥ 0).
+    /// The modelled part: `"full"`, `"half"` (y ≥ 0) or `"quarter"` (x ≥ 0, y ≥ 0).
     pub symmetry: Symmetry,
     /// Modelled volume per whole-specimen volume (1 or 0.25).
     pub modelled_fraction: f64,
@@ -342,6 +342,7 @@ fn group_counts(
     let mut group_entities = BTreeMap::new();
     let mirror_groups: &[&str] = match symmetry {
         Symmetry::Full => &[],
+        Symmetry::Half => &[groups::SYMMETRY_Y],
         Symmetry::Quarter => &[groups::SYMMETRY_X, groups::SYMMETRY_Y],
     };
     for &name in [

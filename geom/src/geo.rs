@@ -9,7 +9,8 @@
 //! z = l_adh makes the interface conformal. A quarter model (smooth bars,
 //! `specimen.symmetry`) intersects the bar with the box x, y ≥ 0 before the
 //! fragments, uses the quarter of the cube and of the plane, and adds the
-//! groups `symmetry_x` / `symmetry_y` (all faces on x = 0 / y = 0).
+//! groups `symmetry_x` / `symmetry_y` (all faces on x = 0 / y = 0); a half
+//! model (herringbone bars) does the same with y ≥ 0 and `symmetry_y` alone.
 //! Entities are found by bounding
 //! box with `Geometry.OCCBoundsUseStl = 1` (tight boxes on curved faces),
 //! never by literal tag. Mesh sizes come from `DefineConstant`s so that the
@@ -36,7 +37,7 @@ pub mod groups {
     pub const CONCRETE_FREE_FACE: &str = "concrete_free_face";
     /// Faces (steel and concrete) on the mirror plane x = 0 of a quarter model.
     pub const SYMMETRY_X: &str = "symmetry_x";
-    /// Faces (steel and concrete) on the mirror plane y = 0 of a quarter model.
+    /// Faces (steel and concrete) on the mirror plane y = 0 of a quarter or half model.
     pub const SYMMETRY_Y: &str = "symmetry_y";
 }
 
@@ -324,36 +325,50 @@ fn geo_bar(w: &mut String, layout: &Layout) {
     }
 }
 
-/// The quarter's cut of the bar, the cube and the fragments that make the
-/// steel–concrete interface conformal.
+/// The symmetric part's cut of the bar, the cube and the fragments that make
+/// the steel–concrete interface conformal.
 fn geo_cube(w: &mut String, layout: &Layout) {
     let has_cut = layout.l_adh < layout.l;
-    let quarter = layout.symmetry == Symmetry::Quarter;
-    if quarter {
+    // Lower x of the kept box (0 for the quarter), and the modelled part's
+    // lower corner and sides in x and y of the cube's cross-section.
+    let (cut, x0, c0, cs) = match layout.symmetry {
+        Symmetry::Full => (None, "", ["-L / 2", "-L / 2"], ["L", "L"]),
+        Symmetry::Half => (
+            Some("Half model: keep the part y >= 0 of the bar; the plane y = 0 of its\n\
+                  // longitudinal ribs is a mirror plane of the herringbone specimen."),
+            "-(r_out + R)",
+            ["-L / 2", "0"],
+            ["L", "L / 2"],
+        ),
+        Symmetry::Quarter => (
+            Some("Quarter model: keep the part x >= 0, y >= 0 of the bar; the planes x = 0\n\
+                  // and y = 0 are mirror planes of the specimen."),
+            "0",
+            ["0", "0"],
+            ["L / 2", "L / 2"],
+        ),
+    };
+    if let Some(what) = cut {
+        let xs = if x0 == "0" { "r_out + R" } else { "2 * (r_out + R)" };
         let _ = writeln!(
             w,
-            "\n// Quarter model: keep the part x >= 0, y >= 0 of the bar; the planes x = 0\n\
-             // and y = 0 are mirror planes of the specimen. The box overshoots the bar\n\
+            "\n// {what} The box overshoots the bar\n\
              // ends so that no face of it coincides with a bar end.\n\
-             qb = newv; Box(qb) = {{0, 0, z_lo - R, r_out + R, r_out + R, z_hi - z_lo + 2 * R}};\n\
+             qb = newv; Box(qb) = {{{x0}, 0, z_lo - R, {xs}, r_out + R, z_hi - z_lo + 2 * R}};\n\
              bar() = BooleanIntersection{{ Volume{{bar()}}; Delete; }}{{ Volume{{qb}}; Delete; }};"
         );
     }
-    // Lower corner and side of the modelled part of the cube's cross-section.
-    let (c0, cs) = if quarter {
-        ("0", "L / 2")
-    } else {
-        ("-L / 2", "L")
-    };
+    let [cx0, cy0] = c0;
+    let [csx, csy] = cs;
     let _ = writeln!(
         w,
         "\n// Concrete cube{part}; fragments with the bar{cut_note} give a conformal\n\
          // steel-concrete interface split at z = 0{cut_z}, L.\n\
-         cube = newv; Box(cube) = {{{c0}, {c0}, 0, {cs}, {cs}, L}};",
-        part = if quarter {
-            " (its quarter x, y >= 0)"
-        } else {
-            ""
+         cube = newv; Box(cube) = {{{cx0}, {cy0}, 0, {csx}, {csy}, L}};",
+        part = match layout.symmetry {
+            Symmetry::Full => "",
+            Symmetry::Half => " (its half y >= 0)",
+            Symmetry::Quarter => " (its quarter x, y >= 0)",
         },
         cut_note = if has_cut {
             " and the plane z = l_adh"
@@ -365,7 +380,7 @@ fn geo_cube(w: &mut String, layout: &Layout) {
     if has_cut {
         let _ = writeln!(
             w,
-            "cut = news; Rectangle(cut) = {{{c0}, {c0}, l_adh, {cs}, {cs}}};\n\
+            "cut = news; Rectangle(cut) = {{{cx0}, {cy0}, l_adh, {csx}, {csy}}};\n\
              BooleanFragments{{ Volume{{bar(), cube}}; Delete; }}{{ Surface{{cut}}; Delete; }}"
         );
     } else {
@@ -379,7 +394,6 @@ fn geo_cube(w: &mut String, layout: &Layout) {
 /// The selections of volumes and faces, and the physical groups the mesh
 /// stage reads.
 fn geo_groups(w: &mut String, layout: &Layout) {
-    let quarter = layout.symmetry == Symmetry::Quarter;
     let _ = writeln!(
         w,
         "\n// Steel: the volumes inside the bar's box; concrete: all the others.\n\
@@ -389,7 +403,7 @@ fn geo_groups(w: &mut String, layout: &Layout) {
          concrete() -= steel();\n\
          \n\
          // Interface: bar faces with z in [0, L] except the flat bar sections at\n\
-         // z = 0, l_adh, L (and, in a quarter model, the bar's faces on the mirror\n\
+         // z = 0, l_adh, L (and, in a quarter or half model, the bar's faces on the mirror\n\
          // planes x = 0, y = 0); split by the centre of their box at l_adh.\n\
          cand() = Surface In BoundingBox{{-rb, -rb, -tol, rb, rb, L + tol}};\n\
          adh() = {{}}; fre() = {{}};\n\
@@ -439,18 +453,34 @@ fn geo_groups(w: &mut String, layout: &Layout) {
         cb = groups::CONCRETE_BEARING_FACE,
         cf = groups::CONCRETE_FREE_FACE,
     );
-    if quarter {
+    let planes: &[(&str, &str)] = match layout.symmetry {
+        Symmetry::Full => &[],
+        Symmetry::Half => &[("sym_y", groups::SYMMETRY_Y)],
+        Symmetry::Quarter => &[("sym_x", groups::SYMMETRY_X), ("sym_y", groups::SYMMETRY_Y)],
+    };
+    if !planes.is_empty() {
         let _ = writeln!(
             w,
-            "\n// Mirror planes of the quarter model: every face (steel and concrete, inside\n\
-             // and outside the cube) lying in x = 0, resp. y = 0.\n\
-             span = L / 2 + z_hi - z_lo;\n\
-             sym_x() = Surface In BoundingBox{{-tol, -tol, z_lo - tol, tol, span, z_hi + tol}};\n\
-             sym_y() = Surface In BoundingBox{{-tol, -tol, z_lo - tol, span, tol, z_hi + tol}};\n\
-             Physical Surface(\"{sx}\") = {{sym_x()}};\n\
-             Physical Surface(\"{sy}\") = {{sym_y()}};",
-            sx = groups::SYMMETRY_X,
-            sy = groups::SYMMETRY_Y,
+            "\n// Mirror planes: every face (steel and concrete, inside and outside the\n\
+             // cube) lying in x = 0, resp. y = 0.\n\
+             span = L / 2 + z_hi - z_lo;"
+        );
+    }
+    for (var, group) in planes {
+        let lo_x = if layout.symmetry == Symmetry::Half {
+            "-span"
+        } else {
+            "-tol"
+        };
+        let bbox = if *var == "sym_x" {
+            "-tol, -tol, z_lo - tol, tol, span, z_hi + tol".to_string()
+        } else {
+            format!("{lo_x}, -tol, z_lo - tol, span, tol, z_hi + tol")
+        };
+        let _ = writeln!(
+            w,
+            "{var}() = Surface In BoundingBox{{{bbox}}};\n\
+             Physical Surface(\"{group}\") = {{{var}()}};"
         );
     }
 }

@@ -37,23 +37,33 @@ pub enum SideB {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "lowercase")]
 pub enum RawSymmetry {
-    /// The quarter for a smooth bar, the whole specimen for a ribbed one.
+    /// The smallest exact part: the quarter of a smooth bar's specimen, the
+    /// half of a herringbone bar's (side B mirrored, no phase), the whole
+    /// of a spiral one's.
     #[default]
     Auto,
     Full,
+    /// The half y ≥ 0: a smooth bar, or a herringbone bar without phase.
+    Half,
     Quarter,
 }
 
 /// The modelled part of the specimen, resolved. The smooth bar in the cube
 /// has the mirror planes x = 0 and y = 0 (loading, supports and the FED/force
 /// measurements are symmetric in both), so the quarter x ≥ 0, y ≥ 0 with
-/// those planes held normal gives the whole specimen's response. Spiral ribs
-/// are not mirror-symmetric: a ribbed bar is always modelled whole.
+/// those planes held normal gives the whole specimen's response. A
+/// herringbone bar whose side B is the mirror image of side A in the plane
+/// of the longitudinal ribs (y = 0) with no axial phase between the sides is
+/// mirror-symmetric in that plane alone: the half y ≥ 0. A spiral bar
+/// (side B rotated) has no mirror plane through its axis and is modelled
+/// whole.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "lowercase")]
 pub enum Symmetry {
     #[default]
     Full,
+    /// The half y ≥ 0, the plane y = 0 held normal.
+    Half,
     Quarter,
 }
 
@@ -62,6 +72,7 @@ impl Symmetry {
     pub fn fraction(self) -> f64 {
         match self {
             Symmetry::Full => 1.0,
+            Symmetry::Half => 0.5,
             Symmetry::Quarter => 0.25,
         }
     }
@@ -383,21 +394,7 @@ pub fn resolve(bar: &RawBar, specimen: &RawSpecimen) -> Result<(Bar, Specimen), 
         ">= 0",
     )?;
 
-    let symmetry = match (specimen.symmetry.unwrap_or_default(), bar.kind) {
-        (RawSymmetry::Full, _) | (RawSymmetry::Auto, BarKind::Ribbed) => Symmetry::Full,
-        (RawSymmetry::Quarter, BarKind::Smooth) | (RawSymmetry::Auto, BarKind::Smooth) => {
-            Symmetry::Quarter
-        }
-        (RawSymmetry::Quarter, BarKind::Ribbed) => {
-            return Err(SpecError::Inconsistent {
-                key: "specimen.symmetry".into(),
-                problem: "quarter needs a smooth bar: spiral ribs have no mirror planes \
-                          through the axis, so a quarter model would not be the specimen; \
-                          use full or auto"
-                    .into(),
-            })
-        }
-    };
+    let symmetry = resolve_symmetry(specimen.symmetry.unwrap_or_default(), &bar)?;
 
     Ok((
         bar,
@@ -409,6 +406,47 @@ pub fn resolve(bar: &RawBar, specimen: &RawSpecimen) -> Result<(Bar, Specimen), 
             symmetry,
         },
     ))
+}
+
+/// The modelled part `raw` asks for, checked against the bar's symmetry.
+fn resolve_symmetry(raw: RawSymmetry, bar: &Bar) -> Result<Symmetry, SpecError> {
+    // Only a herringbone bar without phase between its sides has the mirror
+    // plane y = 0 (the plane of its longitudinal ribs).
+    let mirror_plane = match &bar.ribs {
+        None => Ok(()),
+        Some(ribs) => match ribs.transverse.side_b {
+            SideB::Rotated => Err(
+                "side B is rotated (a spiral bar): the specimen is symmetric under the \
+                 half-turn about the axis, not in a mirror plane",
+            ),
+            SideB::Mirrored if ribs.transverse.phase != 0.0 => Err(
+                "side B's ribs are shifted by bar.ribs.phase, so they are not the \
+                 mirror images of side A's",
+            ),
+            SideB::Mirrored => Ok(()),
+        },
+    };
+    let refuse = |what: &str, why: &str| SpecError::Inconsistent {
+        key: "specimen.symmetry".into(),
+        problem: format!("{what} needs a mirror plane: {why}; use full or auto"),
+    };
+    match (raw, bar.kind) {
+        (RawSymmetry::Full, _) => Ok(Symmetry::Full),
+        (RawSymmetry::Auto | RawSymmetry::Quarter, BarKind::Smooth) => Ok(Symmetry::Quarter),
+        (RawSymmetry::Half, _) => mirror_plane
+            .map(|_| Symmetry::Half)
+            .map_err(|why| refuse("half", why)),
+        (RawSymmetry::Auto, BarKind::Ribbed) => {
+            Ok(mirror_plane.map_or(Symmetry::Full, |_| Symmetry::Half))
+        }
+        (RawSymmetry::Quarter, BarKind::Ribbed) => Err(SpecError::Inconsistent {
+            key: "specimen.symmetry".into(),
+            problem: "quarter needs a smooth bar: a ribbed bar has at most one mirror \
+                      plane through its axis (herringbone: use half), so a quarter model \
+                      would not be the specimen; use half, full or auto"
+                .into(),
+        }),
+    }
 }
 
 fn resolve_ribs(raw: RawRibs, raw_l: RawLongitudinalRibs, d: f64) -> Result<Ribs, SpecError> {
@@ -762,6 +800,32 @@ mod tests {
         assert_eq!(json["symmetry"], "quarter");
     }
 
+    /// `auto` models the half y ≥ 0 of a herringbone bar without phase (its
+    /// one mirror plane is that of the longitudinal ribs) and the whole of a
+    /// spiral one or of a herringbone one with phase; `half` where there is
+    /// no mirror plane is refused naming the key and the reason (issue 14).
+    #[test]
+    fn symmetry_half_only_for_a_mirror_plane() {
+        let hb = "{kind: ribbed, diameter: 8 mm, ribs: {side_b: mirrored}}";
+        let hb_phase = "{kind: ribbed, diameter: 8 mm, ribs: {side_b: mirrored, phase: 1 mm}}";
+        let spiral = "{kind: ribbed, diameter: 8 mm, ribs: {side_b: rotated}}";
+        let smooth = "{kind: smooth, diameter: 8 mm}";
+        let sym = |bar: &str, sp: &str| try_resolve(bar, sp).unwrap().1.symmetry;
+        assert_eq!(sym(hb, "{}"), Symmetry::Half);
+        assert_eq!(sym(hb, "{symmetry: half}"), Symmetry::Half);
+        assert_eq!(sym(hb, "{symmetry: full}"), Symmetry::Full);
+        assert_eq!(sym(hb_phase, "{}"), Symmetry::Full);
+        assert_eq!(sym(spiral, "{}"), Symmetry::Full);
+        assert_eq!(sym(smooth, "{symmetry: half}"), Symmetry::Half);
+        assert_eq!(Symmetry::Half.fraction(), 0.5);
+        for (bar, why) in [(spiral, "half-turn"), (hb_phase, "bar.ribs.phase")] {
+            let msg = err(bar, "{symmetry: half}");
+            assert!(msg.contains("specimen.symmetry") && msg.contains(why), "{msg}");
+        }
+        let msg = err(hb, "{symmetry: quarter}");
+        assert!(msg.contains("specimen.symmetry") && msg.contains("use half"), "{msg}");
+    }
+
     /// A quarter model of a ribbed bar is rejected naming `specimen.symmetry` and why (spiral ribs have no mirror planes; SPEC §8).
     #[test]
     fn quarter_ribbed_bar_is_rejected() {
@@ -772,7 +836,7 @@ mod tests {
                 && msg.contains("mirror"),
             "{msg}"
         );
-        assert!(serde_yaml::from_str::<RawSpecimen>("{symmetry: half}").is_err());
+        assert!(serde_yaml::from_str::<RawSpecimen>("{symmetry: eighth}").is_err());
     }
 
     /// `bar.ribs.flank_angle` sets b_base = b_top + 2a / tan α (90° gives b_top); it excludes `base_width`, and

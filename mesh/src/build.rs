@@ -32,9 +32,9 @@ pub const REQUIRED_SURFACES: [&str; 5] = [
 ];
 /// Physical surface that may be absent (no free zone when l_adh = L).
 pub const OPTIONAL_SURFACES: [&str; 1] = ["interface_free"];
-/// Physical surfaces of a quarter model's mirror planes x = 0 and y = 0
-/// (steel and concrete faces). Both present: [`Symmetry::Quarter`]; both
-/// absent: [`Symmetry::Full`]; one alone is an error.
+/// Physical surfaces of the mirror planes x = 0 and y = 0 (steel and
+/// concrete faces). Both present: [`Symmetry::Quarter`]; y = 0 alone:
+/// [`Symmetry::Half`]; none: [`Symmetry::Full`]; x = 0 alone is an error.
 pub const SYMMETRY_SURFACES: [&str; 2] = ["symmetry_x", "symmetry_y"];
 
 /// Counts and measures of a built model, written as `mesh.json`.
@@ -94,6 +94,7 @@ mod symmetry_name {
     pub fn serialize<S: Serializer>(s: &Symmetry, ser: S) -> Result<S::Ok, S::Error> {
         ser.serialize_str(match s {
             Symmetry::Full => "full",
+            Symmetry::Half => "half",
             Symmetry::Quarter => "quarter",
         })
     }
@@ -101,9 +102,10 @@ mod symmetry_name {
     pub fn deserialize<'de, D: Deserializer<'de>>(de: D) -> Result<Symmetry, D::Error> {
         match String::deserialize(de)?.as_str() {
             "full" => Ok(Symmetry::Full),
+            "half" => Ok(Symmetry::Half),
             "quarter" => Ok(Symmetry::Quarter),
             other => Err(serde::de::Error::custom(format!(
-                "symmetry {other:?}: expected \"full\" or \"quarter\""
+                "symmetry {other:?}: expected \"full\", \"half\" or \"quarter\""
             ))),
         }
     }
@@ -605,22 +607,23 @@ fn mirror_set(raw: &RawMesh, numbering: &Numbering, group: &str) -> Result<Vec<u
 }
 
 /// The boundary-condition node sets and the symmetry the mirror-plane
-/// groups declare (both: quarter; none: full; one alone is an error).
+/// groups declare (both: quarter; y = 0 alone: half; none: full; x = 0
+/// alone is an error).
 fn node_sets(raw: &RawMesh, numbering: &Numbering) -> Result<(NodeSets, Symmetry), MeshError> {
     let present = SYMMETRY_SURFACES.map(|g| raw.surfaces.get(g).is_some_and(|v| !v.is_empty()));
     let symmetry = match present {
         [true, true] => Symmetry::Quarter,
+        [false, true] => Symmetry::Half,
         [false, false] => Symmetry::Full,
-        _ => {
-            let (have, lack) = if present[0] {
-                (SYMMETRY_SURFACES[0], SYMMETRY_SURFACES[1])
-            } else {
-                (SYMMETRY_SURFACES[1], SYMMETRY_SURFACES[0])
-            };
+        [true, false] => {
             return Err(missing_group(
                 raw,
-                lack,
-                &format!("a physical surface of triangles: \"{have}\" is present, and a quarter model needs both mirror planes"),
+                SYMMETRY_SURFACES[1],
+                &format!(
+                    "a physical surface of triangles: \"{}\" is present, and a quarter model \
+                     needs both mirror planes (a half model has y = 0 alone)",
+                    SYMMETRY_SURFACES[0]
+                ),
             ));
         }
     };

@@ -23,6 +23,7 @@ pub mod gmsh_run;
 pub mod model;
 pub mod read;
 pub mod spec;
+pub mod unfold;
 pub mod vtu;
 
 pub use build::{build_model, MeshReport, Timings};
@@ -31,6 +32,7 @@ pub use gmsh_run::{gmsh_args, run_gmsh, Gmsh, GmshTiming};
 pub use model::*;
 pub use read::{read_msh, RawMesh};
 pub use spec::{MeshSpec, RawMeshSpec};
+pub use unfold::Unfolded;
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;

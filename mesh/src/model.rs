@@ -65,13 +65,16 @@ pub struct NodeSets {
 /// Which part of the specimen the model holds. A smooth bar in the cube has
 /// the mirror planes x = 0 and y = 0; the quarter x ≥ 0, y ≥ 0 with those
 /// planes held normal gives the whole specimen's response at a quarter of
-/// the cost. Forces measured on the model are multiplied by
+/// the cost. A herringbone bar has the plane y = 0 alone: the half y ≥ 0.
+/// Forces measured on the model are multiplied by
 /// [`Symmetry::force_factor`].
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
 pub enum Symmetry {
     #[default]
     Full,
+    // After Quarter: model files store the variant's index.
     Quarter,
+    Half,
 }
 
 impl Symmetry {
@@ -79,6 +82,7 @@ impl Symmetry {
     pub fn force_factor(self) -> f64 {
         match self {
             Symmetry::Full => 1.0,
+            Symmetry::Half => 2.0,
             Symmetry::Quarter => 4.0,
         }
     }

@@ -136,3 +136,54 @@ fn full_mesh_has_no_symmetry_sets() {
     assert!(m.node_sets.symmetry_x.is_empty() && m.node_sets.symmetry_y.is_empty());
     assert!(m.nodes.iter().any(|p| p[0] < -1e-3));
 }
+
+/// A herringbone bar (side B mirrored, no phase) is modelled as the half
+/// y ≥ 0 by default: gmsh meshes it, the model passes every topology check,
+/// its mirror-plane set is complete and holds both sides of the interface,
+/// its interface area and volumes ×2 are the geometry's whole specimen
+/// within 1 %, and it unfolds into a whole model that passes the same
+/// checks (issue 14: half models).
+#[test]
+fn half_herringbone_model() {
+    let dir = scratch("half-herringbone");
+    let bar: geom::spec::RawBar = serde_yaml::from_str(
+        "{kind: ribbed, diameter: 8 mm, ribs: {height: 0.52 mm, spacing: 5 mm, angle: 55 deg, \
+         side_b: mirrored}}",
+    )
+    .unwrap();
+    let specimen: geom::spec::RawSpecimen = serde_yaml::from_str(
+        "{cube_side: 24 mm, adhesive_length: 10 mm, free_overhang: 2 mm, loaded_overhang: 4 mm}",
+    )
+    .unwrap();
+    let (bar, specimen) = geom::spec::resolve(&bar, &specimen).unwrap();
+    assert_eq!(specimen.symmetry, geom::spec::Symmetry::Half);
+    let built = geom::build_geometry(&bar, &specimen, gmsh(), &dir).unwrap();
+    let spec = MeshSpec {
+        h_interface: 1.6e-3,
+        h_outer: 6e-3,
+        ..MeshSpec::default()
+    };
+    let r = mesh_specimen(gmsh(), &dir.join("specimen.geo"), &spec, 0.008, 0.010, &dir).unwrap();
+    let m = Model::load(&dir.join(mesh::MODEL_FILE)).unwrap();
+    check_topology(&m);
+    assert_eq!((m.symmetry, r.symmetry), (Symmetry::Half, Symmetry::Half));
+    assert_eq!(m.symmetry.force_factor(), 2.0);
+    assert!(m.nodes.iter().all(|p| p[1] > -1e-12));
+    assert!(m.nodes.iter().any(|p| p[0] < -1e-3) && m.nodes.iter().any(|p| p[0] > 1e-3));
+    assert!(m.node_sets.symmetry_x.is_empty());
+    let set = &m.node_sets.symmetry_y;
+    let on_plane = (0..m.nodes.len()).filter(|&i| m.nodes[i][1].abs() < 1e-12).count();
+    assert_eq!(set.len(), on_plane, "the plane's set is incomplete");
+    let sides: std::collections::HashSet<_> = set.iter().map(|&i| m.node_region[i as usize]).collect();
+    assert_eq!(sides.len(), 2, "both sides on the plane, got {sides:?}");
+    let rel = (2.0 * r.interface_area_adhesive_m2 - built.interface_area_adhesive_m2).abs()
+        / built.interface_area_adhesive_m2;
+    assert!(rel < 0.01, "adhesive area ×2 off the geometry's by {rel}");
+
+    let whole = m.unfold();
+    check_topology(&whole.model);
+    assert_eq!(whole.model.nodes.len(), 2 * m.nodes.len() - set.len());
+    assert_eq!(whole.model.interfaces.len(), 2 * m.interfaces.len());
+    let area = |model: &Model| model.interfaces.iter().map(|e| e.area).sum::<f64>();
+    assert!((area(&whole.model) - 2.0 * area(&m)).abs() < 1e-9 * area(&m));
+}

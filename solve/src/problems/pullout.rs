@@ -9,6 +9,9 @@
 //!   deformation; the three other modes are held by u_z = 0 on the face);
 //! * quarter models (`Symmetry::Quarter`): u_x = 0 on `symmetry_x`, u_y = 0
 //!   on `symmetry_y` instead of the point constraints; forces × 4;
+//! * half models (`Symmetry::Half`, y ≥ 0): u_y = 0 on `symmetry_y` (holds y
+//!   translation and rotation about z) and the one point constraint on u_x
+//!   of the whole model's three, which lies in the half; forces × 2;
 //! * bar loaded end: u_z = λ (the imposed displacement), u_x = u_y = 0 (the
 //!   machine's grip; it also holds the bar's lateral modes once the
 //!   interface has lost its shear stiffness);
@@ -131,8 +134,17 @@ pub fn pullout_conditions(model: &Model) -> Result<(Dirichlet, Measurement), Sol
     };
     // Nearest the line y = 0: two points at both ends hold u_y (y
     // translation and rotation about z); nearest x = 0: one holds u_x.
-    let (a, b) = nearest(1);
     let (_, c) = nearest(0);
+    if model.symmetry == Symmetry::Half {
+        // The mirror plane y = 0 holds u_y; c (largest y) is in the half.
+        need("symmetry_y", &sets.symmetry_y)?;
+        for &n in &sets.symmetry_y {
+            fix(&mut dir, 3 * n as usize + 1, 0.0);
+        }
+        fix(&mut dir, 3 * c as usize, 0.0);
+        return Ok((dir, measurement(model)));
+    }
+    let (a, b) = nearest(1);
     if x(&b)[0] - x(&a)[0] <= 0.0 {
         return Err(SolveError::Model(
             "concrete_bearing_face has no extent in x: cannot remove the rotation about z".into(),
