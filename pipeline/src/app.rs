@@ -75,6 +75,7 @@ fn dispatch(command: Command, printer: &Printer) -> Result<ExitCode> {
         Command::Material(a) => crate::commands::material(&a),
         Command::Study(a) => crate::study_run::run(&a, printer),
         Command::Bench(a) => crate::bench::run(&a, printer),
+        Command::Compare(a) => crate::commands::compare(&a),
     }
 }
 

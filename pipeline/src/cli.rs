@@ -58,6 +58,8 @@ pub enum Command {
     Study(StudyArgs),
     /// Benchmarks: run time against error, written as Markdown tables and plots.
     Bench(BenchArgs),
+    /// Distance between two runs' σ_mb curves (relative L2) and their first peaks.
+    Compare(CompareArgs),
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum, PartialEq, Eq)]
@@ -105,6 +107,25 @@ pub struct CleanArgs {
     /// Remove the whole work directory's store as well.
     #[arg(long)]
     pub all: bool,
+}
+
+#[derive(Debug, Args)]
+pub struct CompareArgs {
+    /// The run compared: its curve.csv (or the scene directory holding it).
+    pub test: PathBuf,
+    /// The reference run: its curve.csv (or the scene directory holding it).
+    pub reference: PathBuf,
+    /// Abscissa of the comparison: free-end displacement or imposed displacement.
+    #[arg(long, value_enum, default_value = "fed")]
+    pub along: CompareAxis,
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum, PartialEq, Eq)]
+pub enum CompareAxis {
+    /// Free-end displacement (the plotted axis).
+    Fed,
+    /// Imposed displacement of the loaded end.
+    U,
 }
 
 #[derive(Debug, Args)]

@@ -1,6 +1,6 @@
 //! Command bodies shared by the binary and the study runner.
 
-use crate::cli::{CleanArgs, MaterialArgs};
+use crate::cli::{CleanArgs, CompareArgs, CompareAxis, MaterialArgs};
 use crate::progress::Printer;
 use crate::scene::Scene;
 use crate::stage::{Ctx, Keys, Stage};
@@ -76,6 +76,41 @@ pub fn clean(args: &CleanArgs, printer: &Printer) -> Result<ExitCode> {
 }
 
 /// The material-point driver.
+/// `ribbar compare`: the relative L2 distance of the test run's σ_mb curve
+/// from the reference's over their common range (`post::curve_distance`),
+/// and both first peaks.
+pub fn compare(args: &CompareArgs) -> Result<ExitCode> {
+    let read = |path: &Path| {
+        let file = if path.is_dir() {
+            path.join("curve.csv")
+        } else {
+            path.to_path_buf()
+        };
+        crate::post::read_curve_csv(&file).with_context(|| format!("reading {}", file.display()))
+    };
+    let (test, reference) = (read(&args.test)?, read(&args.reference)?);
+    let (axis, name) = match args.along {
+        CompareAxis::Fed => (crate::post::CurveAxis::Fed, "FED"),
+        CompareAxis::U => (crate::post::CurveAxis::ImposedDisplacement, "u"),
+    };
+    let distance = crate::post::curve_distance(&test, &reference, axis, None)?;
+    let (peak_t, fed_t, _) = crate::post::first_peak_bond_stress(&test)?;
+    let (peak_r, fed_r, _) = crate::post::first_peak_bond_stress(&reference)?;
+    println!(
+        "relative L2 distance of sigma_mb along {name}: {:.4} %",
+        100.0 * distance
+    );
+    println!(
+        "first peak: {:.4} MPa at FED {:.4} mm (test), {:.4} MPa at FED {:.4} mm (reference), {:+.3} %",
+        peak_t / 1e6,
+        fed_t * 1e3,
+        peak_r / 1e6,
+        fed_r * 1e3,
+        100.0 * (peak_t / peak_r - 1.0)
+    );
+    Ok(ExitCode::SUCCESS)
+}
+
 pub fn material(args: &MaterialArgs) -> Result<ExitCode> {
     let table = solve::problems::material_point::run_file(&args.test)?;
     match &args.output {

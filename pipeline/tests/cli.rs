@@ -459,3 +459,59 @@ fn killed_runs_resume_to_the_same_curve() {
     std::fs::remove_dir_all(&work).unwrap();
     std::fs::remove_dir_all(&reference).unwrap();
 }
+
+/// `ribbar compare` reads two curve files (or scene directories) and prints
+/// the relative L2 distance of σ_mb and both first peaks: a curve 1 % above
+/// its reference is 1 % away with a first peak +1 %; a missing file is named.
+#[test]
+fn compare_prints_the_distance_of_two_curves() {
+    let dir = work_dir("compare");
+    std::fs::create_dir_all(dir.join("ref")).unwrap();
+    let curve = |scale: f64| {
+        let mut s = String::from("step,u_imposed,force,fed,bond_stress,iterations\n");
+        for k in 0..=20 {
+            let u = 1e-5 * k as f64;
+            let fed = (u - 2e-5).max(0.0);
+            // Rises to a peak at step 8, then softens.
+            let sigma = scale
+                * 1e6
+                * if k <= 8 {
+                    k as f64
+                } else {
+                    8.0 - 0.3 * (k - 8) as f64
+                };
+            s += &format!("{k},{u:e},{:e},{fed:e},{sigma:e},3\n", sigma * 1e-3);
+        }
+        s
+    };
+    std::fs::write(dir.join("ref/curve.csv"), curve(1.0)).unwrap();
+    std::fs::write(dir.join("test.csv"), curve(1.01)).unwrap();
+    let test = dir.join("test.csv");
+    let reference = dir.join("ref");
+    let out = ok(&[
+        "compare",
+        test.to_str().unwrap(),
+        reference.to_str().unwrap(),
+    ]);
+    assert!(out.contains("along FED: 1.0000 %"), "{out}");
+    assert!(
+        out.contains("8.0800 MPa") && out.contains("8.0000 MPa") && out.contains("+1.000 %"),
+        "{out}"
+    );
+    let along_u = ok(&[
+        "compare",
+        test.to_str().unwrap(),
+        reference.to_str().unwrap(),
+        "--along",
+        "u",
+    ]);
+    assert!(along_u.contains("along u: 1.0000 %"), "{along_u}");
+    let missing = ribbar(&[
+        "compare",
+        dir.join("nothing.csv").to_str().unwrap(),
+        test.to_str().unwrap(),
+    ]);
+    assert!(!missing.status.success());
+    assert!(text(&missing).contains("nothing.csv"), "{}", text(&missing));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
