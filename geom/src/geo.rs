@@ -334,22 +334,30 @@ fn geo_cube(w: &mut String, layout: &Layout) {
     let (cut, x0, c0, cs) = match layout.symmetry {
         Symmetry::Full => (None, "", ["-L / 2", "-L / 2"], ["L", "L"]),
         Symmetry::Half => (
-            Some("Half model: keep the part y >= 0 of the bar; the plane y = 0 of its\n\
-                  // longitudinal ribs is a mirror plane of the herringbone specimen."),
+            Some(
+                "Half model: keep the part y >= 0 of the bar; the plane y = 0 of its\n\
+                  // longitudinal ribs is a mirror plane of the herringbone specimen.",
+            ),
             "-(r_out + R)",
             ["-L / 2", "0"],
             ["L", "L / 2"],
         ),
         Symmetry::Quarter => (
-            Some("Quarter model: keep the part x >= 0, y >= 0 of the bar; the planes x = 0\n\
-                  // and y = 0 are mirror planes of the specimen."),
+            Some(
+                "Quarter model: keep the part x >= 0, y >= 0 of the bar; the planes x = 0\n\
+                  // and y = 0 are mirror planes of the specimen.",
+            ),
             "0",
             ["0", "0"],
             ["L / 2", "L / 2"],
         ),
     };
     if let Some(what) = cut {
-        let xs = if x0 == "0" { "r_out + R" } else { "2 * (r_out + R)" };
+        let xs = if x0 == "0" {
+            "r_out + R"
+        } else {
+            "2 * (r_out + R)"
+        };
         let _ = writeln!(
             w,
             "\n// {what} The box overshoots the bar\n\

@@ -820,10 +820,16 @@ mod tests {
         assert_eq!(Symmetry::Half.fraction(), 0.5);
         for (bar, why) in [(spiral, "half-turn"), (hb_phase, "bar.ribs.phase")] {
             let msg = err(bar, "{symmetry: half}");
-            assert!(msg.contains("specimen.symmetry") && msg.contains(why), "{msg}");
+            assert!(
+                msg.contains("specimen.symmetry") && msg.contains(why),
+                "{msg}"
+            );
         }
         let msg = err(hb, "{symmetry: quarter}");
-        assert!(msg.contains("specimen.symmetry") && msg.contains("use half"), "{msg}");
+        assert!(
+            msg.contains("specimen.symmetry") && msg.contains("use half"),
+            "{msg}"
+        );
     }
 
     /// A quarter model of a ribbed bar is rejected naming `specimen.symmetry` and why (spiral ribs have no mirror planes; SPEC §8).

@@ -120,7 +120,11 @@ fn mirror(part: Unfolded, axis: usize) -> Unfolded {
         });
     }
     let both = |set: &Vec<u32>| {
-        let mut v: Vec<u32> = set.iter().copied().chain(set.iter().map(|&n| map(n))).collect();
+        let mut v: Vec<u32> = set
+            .iter()
+            .copied()
+            .chain(set.iter().map(|&n| map(n)))
+            .collect();
         v.sort_unstable();
         v.dedup();
         v

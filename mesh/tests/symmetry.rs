@@ -172,9 +172,12 @@ fn half_herringbone_model() {
     assert!(m.nodes.iter().any(|p| p[0] < -1e-3) && m.nodes.iter().any(|p| p[0] > 1e-3));
     assert!(m.node_sets.symmetry_x.is_empty());
     let set = &m.node_sets.symmetry_y;
-    let on_plane = (0..m.nodes.len()).filter(|&i| m.nodes[i][1].abs() < 1e-12).count();
+    let on_plane = (0..m.nodes.len())
+        .filter(|&i| m.nodes[i][1].abs() < 1e-12)
+        .count();
     assert_eq!(set.len(), on_plane, "the plane's set is incomplete");
-    let sides: std::collections::HashSet<_> = set.iter().map(|&i| m.node_region[i as usize]).collect();
+    let sides: std::collections::HashSet<_> =
+        set.iter().map(|&i| m.node_region[i as usize]).collect();
     assert_eq!(sides.len(), 2, "both sides on the plane, got {sides:?}");
     let rel = (2.0 * r.interface_area_adhesive_m2 - built.interface_area_adhesive_m2).abs()
         / built.interface_area_adhesive_m2;

@@ -1009,7 +1009,10 @@ fn half_model_equals_the_whole_it_unfolds_to() {
     let mut held = std::collections::BTreeSet::new();
     for (i, &src) in whole.node_source.iter().enumerate() {
         for c in 0..3 {
-            let k = half_dir.dofs.iter().position(|&d| d == 3 * src as usize + c);
+            let k = half_dir
+                .dofs
+                .iter()
+                .position(|&d| d == 3 * src as usize + c);
             if let Some(k) = k {
                 if held.insert(3 * i + c) {
                     whole_dir.push(3 * i + c, half_dir.base[k], half_dir.rate[k]);
@@ -1529,4 +1532,3 @@ fn kept_element_matrices_assemble_the_full_tangent() {
         kept.kept_tets()
     );
 }
-
