@@ -22,6 +22,12 @@ pub struct Unfolded {
     /// The same per tet: a tensor component ij is multiplied by
     /// sign_i · sign_j.
     pub tet_reflection: Vec<[f64; 3]>,
+    /// Interface element of the part each element of the whole is the image of.
+    pub interface_source: Vec<u32>,
+    /// Per interface element of the whole, +1 or −1: the sign of its frame's
+    /// h against its source's (a reflection turns h over to keep h = n × t),
+    /// so local h components (traction t_h, slip s_h) take this sign.
+    pub interface_h_sign: Vec<f64>,
 }
 
 impl Model {
@@ -53,6 +59,8 @@ fn identity(m: &Model) -> Unfolded {
         tet_source: (0..m.tets.len() as u32).collect(),
         node_reflection: vec![[1.0; 3]; m.nodes.len()],
         tet_reflection: vec![[1.0; 3]; m.tets.len()],
+        interface_source: (0..m.interfaces.len() as u32).collect(),
+        interface_h_sign: vec![1.0; m.interfaces.len()],
     }
 }
 
@@ -65,6 +73,8 @@ fn mirror(part: Unfolded, axis: usize) -> Unfolded {
         mut tet_source,
         mut node_reflection,
         mut tet_reflection,
+        mut interface_source,
+        mut interface_h_sign,
     } = part;
     let plane = match axis {
         0 => &m.node_sets.symmetry_x,
@@ -104,7 +114,9 @@ fn mirror(part: Unfolded, axis: usize) -> Unfolded {
         tet_reflection.push(reflect(tet_reflection[i]));
     }
     let mut interfaces = m.interfaces.clone();
-    for e in &m.interfaces {
+    for (k, e) in m.interfaces.iter().enumerate() {
+        interface_source.push(interface_source[k]);
+        interface_h_sign.push(-interface_h_sign[k]);
         let mut nodes = e.nodes.map(map);
         nodes.swap(1, 2);
         nodes.swap(4, 5);
@@ -167,5 +179,7 @@ fn mirror(part: Unfolded, axis: usize) -> Unfolded {
         tet_source,
         node_reflection,
         tet_reflection,
+        interface_source,
+        interface_h_sign,
     }
 }

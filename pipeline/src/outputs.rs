@@ -27,6 +27,9 @@ pub struct RawFields {
     pub at_peak: Option<bool>,
     /// Also at the last converged step (default true).
     pub at_end: Option<bool>,
+    /// A half or quarter model's fields on the whole specimen, its mirror
+    /// images included (default false: the modelled part).
+    pub whole_specimen: Option<bool>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
@@ -42,6 +45,10 @@ pub struct FieldRequest {
     pub steps: Vec<usize>,
     pub at_peak: bool,
     pub at_end: bool,
+    /// Left out of the stage key when false, so scenes that do not ask for
+    /// it keep their stored solves.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub whole_specimen: bool,
 }
 
 /// What post produces.
@@ -106,6 +113,7 @@ impl RawOutputs {
                 steps,
                 at_peak: fields.at_peak.unwrap_or(true),
                 at_end: fields.at_end.unwrap_or(true),
+                whole_specimen: fields.whole_specimen.unwrap_or(false),
             },
             post: PostRequest {
                 energy_fed_limit,

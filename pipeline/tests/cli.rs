@@ -207,6 +207,26 @@ fn stages_rerun_only_what_changed() {
     ]);
     assert!(stage_line(&out, "solve").contains("up to date"), "{out}");
     assert!(stage_line(&out, "post").contains("done in"), "{out}");
+
+    // The quarter model's fields on the whole specimen: a solve option
+    // (the stored solve without it stays valid for scenes that do not ask).
+    let whole = "outputs.fields.whole_specimen=true";
+    let out = ok(&["run", TINY, "--work", w, "--set", h, "--set", whole]);
+    assert!(stage_line(&out, "mesh").contains("up to date"), "{out}");
+    assert!(stage_line(&out, "solve").contains("done in"), "{out}");
+    let model = mesh::Model::load(&work.join("tiny-smooth/model.bin")).unwrap();
+    assert_eq!(model.symmetry, mesh::Symmetry::Quarter);
+    let unfolded = model.unfold().model;
+    for part in ["bulk", "interface"] {
+        let vtu = read(&work.join(format!("tiny-smooth/fields/end_{part}.vtu")));
+        assert!(
+            vtu.contains(&format!("NumberOfPoints=\"{}\"", unfolded.nodes.len())),
+            "{part}: not the whole specimen's {} points",
+            unfolded.nodes.len()
+        );
+    }
+    let bulk = read(&work.join("tiny-smooth/fields/end_bulk.vtu"));
+    assert!(bulk.contains(&format!("NumberOfCells=\"{}\"", unfolded.tets.len())));
     std::fs::remove_dir_all(&work).unwrap();
 }
 

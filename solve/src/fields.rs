@@ -9,6 +9,13 @@
 //!
 //! Stresses are recomputed from the committed state and the converged
 //! strain (the laws are pure functions of both), so nothing extra is stored.
+//!
+//! A half or quarter model's fields can be written on the whole specimen
+//! ([`mesh::Unfolded`]): the values are computed on the model once and
+//! copied to the images, displacements reflected, the interface's local h
+//! components (t_h, s_h) signed with the image's frame; the other cell
+//! quantities (damage, principal stresses and their masks, t_n, t_t, s_t)
+//! are invariant under the reflection.
 
 use crate::assembly::{ElementLaws, States};
 use crate::elements::interface::{InterfaceKernel, INTERFACE_POINTS};
@@ -53,23 +60,76 @@ fn write_atomic(path: &Path, text: &str) -> Result<(), FieldsError> {
     })
 }
 
-fn header(out: &mut String, model: &Model, n_cells: usize) {
+fn header(out: &mut String, nodes: &[[f64; 3]], n_cells: usize) {
     out.push_str(
         "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" byte_order=\"LittleEndian\">\n<UnstructuredGrid>\n",
     );
     let _ = writeln!(
         out,
         r#"<Piece NumberOfPoints="{}" NumberOfCells="{n_cells}">"#,
-        model.nodes.len()
+        nodes.len()
     );
     out.push_str("<Points>\n");
     data_array(
         out,
         "Points",
         3,
-        model.nodes.iter().flat_map(|p| p.iter().copied()),
+        nodes.iter().flat_map(|p| p.iter().copied()),
     );
     out.push_str("</Points>\n");
+}
+
+/// The grid a field file is written on: the model itself, or the whole
+/// specimen unfolded from it.
+struct Grid<'a> {
+    model: &'a Model,
+    whole: Option<&'a mesh::Unfolded>,
+}
+
+impl Grid<'_> {
+    fn nodes(&self) -> &[[f64; 3]] {
+        self.whole.map_or(&self.model.nodes, |w| &w.model.nodes)
+    }
+    fn tets(&self) -> &[[u32; 4]] {
+        self.whole.map_or(&self.model.tets, |w| &w.model.tets)
+    }
+    /// The model's tet of each written tet.
+    fn tet_source(&self) -> Box<dyn Iterator<Item = usize> + '_> {
+        match self.whole {
+            None => Box::new(0..self.model.tets.len()),
+            Some(w) => Box::new(w.tet_source.iter().map(|&t| t as usize)),
+        }
+    }
+    /// The displacement of every written node.
+    fn displacement<'b>(&'b self, u: &'b [f64]) -> Box<dyn Iterator<Item = f64> + 'b> {
+        match self.whole {
+            None => Box::new(u.iter().copied()),
+            Some(w) => Box::new(
+                w.node_source
+                    .iter()
+                    .zip(&w.node_reflection)
+                    .flat_map(move |(&n, r)| (0..3).map(move |c| r[c] * u[3 * n as usize + c])),
+            ),
+        }
+    }
+    /// (model element, sign of h) of every written interface element.
+    fn interfaces(&self) -> Vec<(usize, f64)> {
+        match self.whole {
+            None => (0..self.model.interfaces.len()).map(|i| (i, 1.0)).collect(),
+            Some(w) => w
+                .interface_source
+                .iter()
+                .zip(&w.interface_h_sign)
+                .map(|(&i, &s)| (i as usize, s))
+                .collect(),
+        }
+    }
+    fn interface_nodes(&self, k: usize) -> [u32; 6] {
+        match self.whole {
+            None => self.model.interfaces[k].nodes,
+            Some(w) => w.model.interfaces[k].nodes,
+        }
+    }
 }
 
 fn cells(out: &mut String, conn: &[Vec<u32>], vtk_type: u8) {
@@ -100,13 +160,15 @@ pub fn principal_stresses(s: &nalgebra::Vector6<f64>) -> [f64; 3] {
     [e[0], e[1], e[2]]
 }
 
-/// Writes the bulk field file (see module doc); `u` global displacement (m).
+/// Writes the bulk field file (see module doc); `u` global displacement
+/// (m); on the whole specimen when `whole` is the model's unfolding.
 pub fn write_bulk_vtu(
     path: &Path,
     model: &Model,
     laws: &ElementLaws,
     u: &[f64],
     states: &States,
+    whole: Option<&mesh::Unfolded>,
 ) -> Result<(), FieldsError> {
     let mut principal = Vec::with_capacity(model.tets.len());
     for (index, t) in model.tets.iter().enumerate() {
@@ -125,60 +187,65 @@ pub fn write_bulk_vtu(
             })?;
         principal.push(principal_stresses(&r.stress));
     }
+    let grid = Grid { model, whole };
     let mut out = String::new();
-    header(&mut out, model, model.tets.len());
-    let conn: Vec<Vec<u32>> = model.tets.iter().map(|t| t.to_vec()).collect();
+    header(&mut out, grid.nodes(), grid.tets().len());
+    let conn: Vec<Vec<u32>> = grid.tets().iter().map(|t| t.to_vec()).collect();
     cells(&mut out, &conn, 10);
     out.push_str("<PointData>\n");
-    data_array(&mut out, "displacement", 3, u.iter().copied());
+    data_array(&mut out, "displacement", 3, grid.displacement(u));
     out.push_str("</PointData>\n<CellData>\n");
-    let region = model
-        .tet_region
-        .iter()
-        .map(|r| if *r == Region::Concrete { 1.0 } else { 0.0 });
+    let region = grid.tet_source().map(|t| {
+        if model.tet_region[t] == Region::Concrete {
+            1.0
+        } else {
+            0.0
+        }
+    });
     data_array(&mut out, "region", 1, region);
-    data_array(&mut out, "D", 1, states.bulk.iter().map(|s| s.damage));
+    let damage = |t: usize| states.bulk[t].damage;
+    data_array(&mut out, "D", 1, grid.tet_source().map(damage));
     data_array(
         &mut out,
         "principal_stress",
         3,
-        principal.iter().flat_map(|p| p.iter().copied()),
+        grid.tet_source().flat_map(|t| principal[t].into_iter()),
     );
     let flag = |b: bool| if b { 1.0 } else { 0.0 };
     data_array(
         &mut out,
         "all_tensile",
         1,
-        principal.iter().map(|p| flag(p[0] > 0.0)),
+        grid.tet_source().map(|t| flag(principal[t][0] > 0.0)),
     );
     data_array(
         &mut out,
         "all_compressive",
         1,
-        principal.iter().map(|p| flag(p[2] < 0.0)),
+        grid.tet_source().map(|t| flag(principal[t][2] < 0.0)),
     );
     data_array(
         &mut out,
         "D_above_0.99",
         1,
-        states.bulk.iter().map(|s| flag(s.damage > 0.99)),
+        grid.tet_source().map(|t| flag(damage(t) > 0.99)),
     );
     out.push_str("</CellData>\n</Piece>\n</UnstructuredGrid>\n</VTKFile>\n");
     write_atomic(path, &out)
 }
 
-/// Writes the interface field file (see module doc).
+/// Writes the interface field file (see module doc); on the whole
+/// specimen when `whole` is the model's unfolding.
 pub fn write_interface_vtu(
     path: &Path,
     model: &Model,
     laws: &ElementLaws,
     u: &[f64],
     states: &States,
+    whole: Option<&mesh::Unfolded>,
 ) -> Result<(), FieldsError> {
-    let mut conn = Vec::new();
-    let mut damage = Vec::new();
-    let mut traction = Vec::new();
-    let mut slip = Vec::new();
+    // Per model element with a law: (D_int, traction, slip).
+    let mut values: Vec<Option<(f64, [f64; 3], [f64; 2])>> = vec![None; model.interfaces.len()];
     for (index, e) in model.interfaces.iter().enumerate() {
         let Some(law) = &laws.interfaces[index] else {
             continue;
@@ -200,13 +267,21 @@ pub fn write_interface_vtu(
                 *sc += pc / INTERFACE_POINTS as f64;
             }
         }
-        conn.push(e.nodes[..3].to_vec());
+        values[index] = Some((d, t, s));
+    }
+    let grid = Grid { model, whole };
+    let (mut conn, mut damage, mut traction, mut slip) = (vec![], vec![], vec![], vec![]);
+    for (k, (source, h_sign)) in grid.interfaces().into_iter().enumerate() {
+        let Some((d, t, s)) = values[source] else {
+            continue;
+        };
+        conn.push(grid.interface_nodes(k)[..3].to_vec());
         damage.push(d);
-        traction.push(t);
-        slip.push(s);
+        traction.push([t[0], t[1], h_sign * t[2]]);
+        slip.push([s[0], h_sign * s[1]]);
     }
     let mut out = String::new();
-    header(&mut out, model, conn.len());
+    header(&mut out, grid.nodes(), conn.len());
     cells(&mut out, &conn, 5);
     out.push_str("<CellData>\n");
     data_array(&mut out, "D_int", 1, damage.into_iter());

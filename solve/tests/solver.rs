@@ -888,8 +888,8 @@ fn vtu_fields_are_written() {
     let dir = std::env::temp_dir().join(format!("ribbar-vtu-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let (b, i) = (dir.join("bulk.vtu"), dir.join("interface.vtu"));
-    solve::fields::write_bulk_vtu(&b, &m, &laws, &res.last.u, &res.last.states).unwrap();
-    solve::fields::write_interface_vtu(&i, &m, &laws, &res.last.u, &res.last.states).unwrap();
+    solve::fields::write_bulk_vtu(&b, &m, &laws, &res.last.u, &res.last.states, None).unwrap();
+    solve::fields::write_interface_vtu(&i, &m, &laws, &res.last.u, &res.last.states, None).unwrap();
     let (bt, it) = (
         std::fs::read_to_string(&b).unwrap(),
         std::fs::read_to_string(&i).unwrap(),
@@ -967,6 +967,18 @@ fn quarter_model_equals_full_model() {
         );
     }
     assert!(common >= 2, "only {common} steps before the peak");
+}
+
+/// The numbers of a VTU DataArray named `name`.
+fn vtu_array(text: &str, name: &str) -> Vec<f64> {
+    let start = text
+        .find(&format!("Name=\"{name}\""))
+        .unwrap_or_else(|| panic!("no array {name}"));
+    let body = &text[start..];
+    let body = &body[body.find('>').unwrap() + 1..body.find("</DataArray>").unwrap()];
+    body.split_whitespace()
+        .map(|v| v.parse().unwrap())
+        .collect()
 }
 
 /// A half model (the plane y = 0 held normal, force × 2) gives exactly the
@@ -1056,6 +1068,54 @@ fn half_model_equals_the_whole_it_unfolds_to() {
     for (a, b) in h.rows.iter().zip(&w.rows) {
         assert_eq!(a.u_imposed, b.u_imposed);
         assert!((a.force - b.force).abs() <= 1e-7 * fmax, "{a:?} vs {b:?}");
+    }
+    // The half's fields written on the whole specimen are the whole's.
+    let dir = std::env::temp_dir().join(format!("ribbar-half-vtu-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let write = |name: &str, model: &Model, r: &solve::nonlinear::RunResult, whole| {
+        let laws = pullout_laws(model);
+        let (b, i) = (
+            dir.join(format!("{name}_bulk.vtu")),
+            dir.join(format!("{name}_interface.vtu")),
+        );
+        solve::fields::write_bulk_vtu(&b, model, &laws, &r.last.u, &r.last.states, whole).unwrap();
+        solve::fields::write_interface_vtu(&i, model, &laws, &r.last.u, &r.last.states, whole)
+            .unwrap();
+        (
+            std::fs::read_to_string(b).unwrap(),
+            std::fs::read_to_string(i).unwrap(),
+        )
+    };
+    let from_half = write("half", &half, &h, Some(&whole));
+    let from_whole = write("whole", w_model, &w, None);
+    std::fs::remove_dir_all(&dir).ok();
+    for (a, b, arrays) in [
+        (
+            &from_half.0,
+            &from_whole.0,
+            &[
+                "Points",
+                "connectivity",
+                "displacement",
+                "D",
+                "principal_stress",
+                "region",
+            ][..],
+        ),
+        (
+            &from_half.1,
+            &from_whole.1,
+            &["connectivity", "D_int", "traction_ntn", "slip_th"][..],
+        ),
+    ] {
+        for name in arrays {
+            let (x, y) = (vtu_array(a, name), vtu_array(b, name));
+            assert_eq!(x.len(), y.len(), "{name}");
+            let scale = y.iter().fold(1e-30f64, |m, v| m.max(v.abs()));
+            for (p, q) in x.iter().zip(&y) {
+                assert!((p - q).abs() <= 1e-6 * scale, "{name}: {p} vs {q}");
+            }
+        }
     }
     // The fields: the whole's displacement is the mirror image of the half's.
     let (uh, uw) = (&h.last.u, &w.last.u);

@@ -35,6 +35,9 @@ struct StageObserver<'a> {
     laws: &'a ElementLaws,
     checkpoint_path: PathBuf,
     fields_dir: PathBuf,
+    /// The whole specimen of a half or quarter model, when its fields are
+    /// asked for on it (`outputs.fields.whole_specimen`).
+    whole: Option<mesh::Unfolded>,
     /// Interface profiles of the field steps, and of the current peak (each
     /// new maximum replaces it); saved in the checkpoint.
     profile: Vec<ProfileRow>,
@@ -67,6 +70,7 @@ impl StageObserver<'_> {
             self.laws,
             view.u,
             view.states,
+            self.whole.as_ref(),
         )?;
         solve::fields::write_interface_vtu(
             &self.fields_dir.join(format!("{name}_interface.vtu")),
@@ -74,6 +78,7 @@ impl StageObserver<'_> {
             self.laws,
             view.u,
             view.states,
+            self.whole.as_ref(),
         )?;
         let rows = solve::fields::profile_rows(
             model,
@@ -203,6 +208,8 @@ pub fn run(ctx: &Ctx, out: &Path) -> Result<()> {
         laws: &laws,
         checkpoint_path: checkpoint_path.clone(),
         fields_dir: out.join("fields"),
+        whole: (ctx.scene.outputs.fields.whole_specimen && model.symmetry != mesh::Symmetry::Full)
+            .then(|| model.unfold()),
         profile: record.profile,
         peak_profile: record.peak_profile,
         last_checkpoint: Instant::now(),
