@@ -234,6 +234,10 @@ pub fn write_bulk_vtu(
     write_atomic(path, &out)
 }
 
+/// One interface element's written values: mean D_int, local traction
+/// (t_n, t_t, t_h, Pa), frictional slip (s_t, s_h, m).
+type InterfaceCell = (f64, [f64; 3], [f64; 2]);
+
 /// Writes the interface field file (see module doc); on the whole
 /// specimen when `whole` is the model's unfolding.
 pub fn write_interface_vtu(
@@ -244,8 +248,7 @@ pub fn write_interface_vtu(
     states: &States,
     whole: Option<&mesh::Unfolded>,
 ) -> Result<(), FieldsError> {
-    // Per model element with a law: (D_int, traction, slip).
-    let mut values: Vec<Option<(f64, [f64; 3], [f64; 2])>> = vec![None; model.interfaces.len()];
+    let mut values: Vec<Option<InterfaceCell>> = vec![None; model.interfaces.len()];
     for (index, e) in model.interfaces.iter().enumerate() {
         let Some(law) = &laws.interfaces[index] else {
             continue;

@@ -89,49 +89,7 @@ pub fn pullout_conditions(model: &Model) -> Result<(Dirichlet, Measurement), Sol
     // expansion of the face and changed the elastic force by 0.45 % on a
     // mirrored test specimen.
     let x = |n: &u32| model.nodes[*n as usize];
-    let face = &sets.concrete_bearing_face;
-    let nearest = |c: usize| {
-        let d = face
-            .iter()
-            .map(|n| x(n)[c].abs())
-            .fold(f64::INFINITY, f64::min);
-        let span = face
-            .iter()
-            .map(|n| x(n)[1 - c].abs())
-            .fold(0.0f64, f64::max);
-        let line: Vec<u32> = face
-            .iter()
-            .copied()
-            .filter(|n| x(n)[c].abs() <= d + 1e-9 * span)
-            .collect();
-        let lo = line
-            .iter()
-            .copied()
-            .min_by(|p, q| x(p)[1 - c].total_cmp(&x(q)[1 - c]))
-            .expect("checked non-empty");
-        let hi = line
-            .iter()
-            .copied()
-            .max_by(|p, q| x(p)[1 - c].total_cmp(&x(q)[1 - c]))
-            .expect("checked non-empty");
-        if lo != hi {
-            return (lo, hi);
-        }
-        // A coarse face may have a single node nearest the line: take the
-        // node nearest it on each side of the axis instead (off the line by
-        // up to an element size, so their u_y holds a little of the face's
-        // Poisson expansion; used only where the line has no second node).
-        let side = |negative: bool| {
-            face.iter()
-                .copied()
-                .filter(|n| (x(n)[1 - c] < 0.0) == negative && x(n)[1 - c] != 0.0)
-                .min_by(|p, q| x(p)[c].abs().total_cmp(&x(q)[c].abs()))
-        };
-        match (side(true), side(false)) {
-            (Some(a), Some(b)) => (a, b),
-            _ => (lo, hi),
-        }
-    };
+    let nearest = |c: usize| line_ends(model, &sets.concrete_bearing_face, c);
     // Nearest the line y = 0: two points at both ends hold u_y (y
     // translation and rotation about z); nearest x = 0: one holds u_x.
     let (_, c) = nearest(0);
@@ -154,6 +112,53 @@ pub fn pullout_conditions(model: &Model) -> Result<(Dirichlet, Measurement), Sol
     fix(&mut dir, 3 * b as usize + 1, 0.0);
     fix(&mut dir, 3 * c as usize, 0.0);
     Ok((dir, measurement(model)))
+}
+
+/// The two bearing-face nodes at the ends of the line of face nodes
+/// nearest the plane x_c = 0 (c = 0: x, 1: y), ordered by the other
+/// coordinate; `face` is non-empty.
+fn line_ends(model: &Model, face: &[u32], c: usize) -> (u32, u32) {
+    let x = |n: &u32| model.nodes[*n as usize];
+    let d = face
+        .iter()
+        .map(|n| x(n)[c].abs())
+        .fold(f64::INFINITY, f64::min);
+    let span = face
+        .iter()
+        .map(|n| x(n)[1 - c].abs())
+        .fold(0.0f64, f64::max);
+    let line: Vec<u32> = face
+        .iter()
+        .copied()
+        .filter(|n| x(n)[c].abs() <= d + 1e-9 * span)
+        .collect();
+    let lo = line
+        .iter()
+        .copied()
+        .min_by(|p, q| x(p)[1 - c].total_cmp(&x(q)[1 - c]))
+        .expect("checked non-empty");
+    let hi = line
+        .iter()
+        .copied()
+        .max_by(|p, q| x(p)[1 - c].total_cmp(&x(q)[1 - c]))
+        .expect("checked non-empty");
+    if lo != hi {
+        return (lo, hi);
+    }
+    // A coarse face may have a single node nearest the line: take the
+    // node nearest it on each side of the axis instead (off the line by
+    // up to an element size, so their u_y holds a little of the face's
+    // Poisson expansion; used only where the line has no second node).
+    let side = |negative: bool| {
+        face.iter()
+            .copied()
+            .filter(|n| (x(n)[1 - c] < 0.0) == negative && x(n)[1 - c] != 0.0)
+            .min_by(|p, q| x(p)[c].abs().total_cmp(&x(q)[c].abs()))
+    };
+    match (side(true), side(false)) {
+        (Some(a), Some(b)) => (a, b),
+        _ => (lo, hi),
+    }
 }
 
 /// σ_y × the bar's section over its loaded overhang (whole specimen, N),
