@@ -11,28 +11,50 @@ if ! command -v ccx >/dev/null 2>&1; then
   $SUDO apt-get update -qq
   DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq calculix-ccx >/dev/null
 fi
-# The Snakemake export is tested against a real snakemake.
-if ! .tools/snakemake-venv/bin/snakemake --version >/dev/null 2>&1; then
-  echo "test: installing snakemake into .tools/snakemake-venv"
-  rm -rf .tools/snakemake-venv
-  python3 -m venv .tools/snakemake-venv
-  .tools/snakemake-venv/bin/pip install -q --disable-pip-version-check "snakemake==9.27.1"
-fi
+# The Snakemake export is tested against a real snakemake, the Python
+# package built with maturin. Their installs wait mostly on the network:
+# they run beside the lint and the build, and are waited for where needed.
+mkdir -p .tools
+install_snakemake() {
+  if ! .tools/snakemake-venv/bin/snakemake --version >/dev/null 2>&1; then
+    echo "test: installing snakemake into .tools/snakemake-venv"
+    rm -rf .tools/snakemake-venv
+    python3 -m venv .tools/snakemake-venv
+    .tools/snakemake-venv/bin/pip install -q --disable-pip-version-check "snakemake==9.27.1"
+  fi
+}
+install_maturin() {
+  if ! .tools/maturin-venv/bin/maturin --version >/dev/null 2>&1; then
+    rm -rf .tools/maturin-venv
+    python3 -m venv .tools/maturin-venv
+    .tools/maturin-venv/bin/pip install -q --disable-pip-version-check "maturin>=1.5,<2"
+  fi
+}
+install_snakemake > .tools/snakemake-install.log 2>&1 &
+snakemake_pid=$!
+install_maturin > .tools/maturin-install.log 2>&1 &
+maturin_pid=$!
+# Waits for a background install; on failure shows its log.
+wait_for() {
+  if ! wait "$1"; then
+    echo "test: installing $2 failed:" >&2
+    cat ".tools/$2-install.log" >&2
+    exit 1
+  fi
+  cat ".tools/$2-install.log"
+}
 cargo fmt --all --check
 # Structure rules of the library crates (docs/architecture.md).
 python3 scripts/check-structure.py
 cargo clippy --workspace --all-targets --quiet -- -D warnings
+wait_for "$snakemake_pid" snakemake
 cargo test --workspace
 # The Python package: its wheel (built with the test profile, whose
 # artifacts the tests above already compiled), installed with its
 # dependencies (the PyPI gmsh among them) into a fresh virtual environment,
 # then the API's tests end to end. `pip install .` builds the same wheel
 # with the release profile.
-if ! .tools/maturin-venv/bin/maturin --version >/dev/null 2>&1; then
-  rm -rf .tools/maturin-venv
-  python3 -m venv .tools/maturin-venv
-  .tools/maturin-venv/bin/pip install -q --disable-pip-version-check "maturin>=1.5,<2"
-fi
+wait_for "$maturin_pid" maturin
 rm -rf target/wheels-test .tools/python-test-venv
 .tools/maturin-venv/bin/maturin build --quiet --profile dev --out target/wheels-test
 python3 -m venv .tools/python-test-venv
