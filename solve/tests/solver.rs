@@ -903,11 +903,9 @@ fn vtu_fields_are_written() {
     assert!(!bt.contains("NaN") && !it.contains("NaN"));
 }
 
-/// A quarter model with the symmetry conditions (u_x = 0 on x = 0, u_y = 0
-/// on y = 0, force × 4) gives the whole model's curve within 0.5 % (issue 7:
-/// symmetry option; SPEC §2 measurements).
-#[test]
-fn quarter_model_equals_full_model() {
+/// The slab as the quarter x, y ≥ 0 of a whole model: its nodes on x = 0
+/// and y = 0 in the mirror-plane sets.
+fn slab_quarter() -> Model {
     let mut quarter = slab_pullout(6);
     for (i, x) in quarter.nodes.iter().enumerate() {
         if x[0].abs() < 1e-12 {
@@ -918,16 +916,30 @@ fn quarter_model_equals_full_model() {
         }
     }
     quarter.symmetry = mesh::Symmetry::Quarter;
-    let full = quarter.unfold().model;
-    assert_eq!(full.tets.len(), 4 * quarter.tets.len());
-    full.check().unwrap();
-    let loading = Loading {
+    quarter
+}
+
+/// Fixed 10 µm steps to 0.3 mm, past the slab's peak.
+fn slab_steps() -> Loading {
+    Loading {
         u_final: 3e-4,
         initial_step: 1e-5,
         max_step: 1e-5,
         growth: 1.0,
         ..Loading::default()
-    };
+    }
+}
+
+/// A quarter model with the symmetry conditions (u_x = 0 on x = 0, u_y = 0
+/// on y = 0, force × 4) gives the whole model's curve within 0.5 % (issue 7:
+/// symmetry option; SPEC §2 measurements).
+#[test]
+fn quarter_model_equals_full_model() {
+    let quarter = slab_quarter();
+    let full = quarter.unfold().model;
+    assert_eq!(full.tets.len(), 4 * quarter.tets.len());
+    full.check().unwrap();
+    let loading = slab_steps();
     let run = |m: &Model| {
         solve_pullout(
             m,
@@ -990,16 +1002,7 @@ fn vtu_array(text: &str, name: &str) -> Vec<f64> {
 /// the whole's own choice of them would be another problem).
 #[test]
 fn half_model_equals_the_whole_it_unfolds_to() {
-    let mut quarter = slab_pullout(6);
-    for (i, x) in quarter.nodes.iter().enumerate() {
-        if x[0].abs() < 1e-12 {
-            quarter.node_sets.symmetry_x.push(i as u32);
-        }
-        if x[1].abs() < 1e-12 {
-            quarter.node_sets.symmetry_y.push(i as u32);
-        }
-    }
-    quarter.symmetry = mesh::Symmetry::Quarter;
+    let quarter = slab_quarter();
     let half = quarter.half_of_quarter().unwrap().model;
     assert_eq!(half.symmetry, mesh::Symmetry::Half);
     assert!(half.node_sets.symmetry_x.is_empty() && !half.node_sets.symmetry_y.is_empty());
@@ -1034,13 +1037,7 @@ fn half_model_equals_the_whole_it_unfolds_to() {
     }
     let (_, whole_meas) = solve::problems::pullout::pullout_conditions(w_model).unwrap();
     assert_eq!(half_meas.force_factor, 2.0);
-    let loading = Loading {
-        u_final: 3e-4,
-        initial_step: 1e-5,
-        max_step: 1e-5,
-        growth: 1.0,
-        ..Loading::default()
-    };
+    let loading = slab_steps();
     // Tight criteria: the two runs then agree far below the default's 1e-4
     // of the force.
     let settings = SolverSettings {
