@@ -50,7 +50,7 @@ impl Check {
 pub struct GeometryReport {
     /// The modelled part: `"full"`, `"half"` (y ≥ 0) or `"quarter"` (x ≥ 0, y ≥ 0).
     pub symmetry: Symmetry,
-    /// Modelled volume per whole-specimen volume (1 or 0.25).
+    /// Modelled volume per whole-specimen volume (1, 0.5 or 0.25).
     pub modelled_fraction: f64,
     #[serde(rename = "f_R")]
     pub f_r: f64,
