@@ -12,8 +12,9 @@ if ! command -v ccx >/dev/null 2>&1; then
   DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq calculix-ccx >/dev/null
 fi
 # The Snakemake export is tested against a real snakemake, the Python
-# package built with maturin. Their installs wait mostly on the network:
-# they run beside the lint and the build, and are waited for where needed.
+# package built with maturin. Their installs (several minutes on a fresh
+# machine) run beside the lint and the build and are waited for where
+# needed.
 mkdir -p .tools
 install_snakemake() {
   if ! .tools/snakemake-venv/bin/snakemake --version >/dev/null 2>&1; then
@@ -47,6 +48,8 @@ cargo fmt --all --check
 # Structure rules of the library crates (docs/architecture.md).
 python3 scripts/check-structure.py
 cargo clippy --workspace --all-targets --quiet -- -D warnings
+# The test build hides the rest of the snakemake install.
+cargo test --workspace --no-run
 wait_for "$snakemake_pid" snakemake
 cargo test --workspace
 # The Python package: its wheel (built with the test profile, whose
