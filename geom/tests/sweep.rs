@@ -40,52 +40,64 @@ fn overlaps(angle: f64, h: f64, s: f64) -> bool {
 /// Every valid design of the grid resolves and its parry3d tessellation agrees with the analytic metrics within 1 %; every overlapping one is rejected naming bar.ribs.base_width (SPEC §3).
 #[test]
 fn full_grid_validates_and_cross_checks() {
+    // One thread per diameter: the tessellations take seconds each.
+    let counts: Vec<(usize, usize)> = std::thread::scope(|scope| {
+        let workers: Vec<_> = [8.0, 16.0]
+            .map(|d| scope.spawn(move || grid_on_diameter(d)))
+            .into_iter()
+            .collect();
+        workers.into_iter().map(|w| w.join().unwrap()).collect()
+    });
+    let (valid, rejected) = counts.iter().fold((0, 0), |(v, r), (a, b)| (v + a, r + b));
+    assert!(
+        valid > 200 && rejected >= 8,
+        "{valid} valid, {rejected} rejected"
+    );
+}
+
+/// The grid's designs on one bar diameter (mm): (valid, rejected).
+fn grid_on_diameter(d: f64) -> (usize, usize) {
     let (mut valid, mut rejected) = (0, 0);
-    for d in [8.0, 16.0] {
-        for angle in ANGLES {
-            for h in HEIGHTS {
-                for s in SPACINGS {
-                    match design(d, angle, h, s, 10.0) {
-                        Ok((bar, sp)) => {
-                            assert!(
-                                !overlaps(angle, h, s),
-                                "accepted overlapping ribs {d} {angle} {h} {s}"
-                            );
-                            let (m, t) = offline_metrics(&bar, &sp);
-                            let core = std::f64::consts::PI
-                                * (d * 5e-4f64).powi(2)
-                                * (sp.bar_z_max() - sp.bar_z_min());
-                            let rel = |a: f64, b: f64| (a - b).abs() / b.abs();
-                            assert!(
-                                rel(t.bar_volume_m3 - core, m.rib_volume_m3) < 0.01,
-                                "{d} {angle} {h} {s}: rib volume"
-                            );
-                            assert!(
-                                rel(t.slab_areas_m2[0], m.interface_area_adhesive_m2) < 0.01,
-                                "{d} {angle} {h} {s}"
-                            );
-                            assert!(
-                                rel(t.slab_areas_m2[1], m.interface_area_free_m2) < 0.01,
-                                "{d} {angle} {h} {s}"
-                            );
-                            assert!(m.f_r > 0.0 && m.rib_volume_m3 > 0.0);
-                            valid += 1;
-                        }
-                        Err(e) => {
-                            assert!(
-                                overlaps(angle, h, s),
-                                "rejected a valid design {d} {angle} {h} {s}: {e}"
-                            );
-                            assert!(e.to_string().contains("bar.ribs.base_width"), "{e}");
-                            rejected += 1;
-                        }
+    for angle in ANGLES {
+        for h in HEIGHTS {
+            for s in SPACINGS {
+                match design(d, angle, h, s, 10.0) {
+                    Ok((bar, sp)) => {
+                        assert!(
+                            !overlaps(angle, h, s),
+                            "accepted overlapping ribs {d} {angle} {h} {s}"
+                        );
+                        let (m, t) = offline_metrics(&bar, &sp);
+                        let core = std::f64::consts::PI
+                            * (d * 5e-4f64).powi(2)
+                            * (sp.bar_z_max() - sp.bar_z_min());
+                        let rel = |a: f64, b: f64| (a - b).abs() / b.abs();
+                        assert!(
+                            rel(t.bar_volume_m3 - core, m.rib_volume_m3) < 0.01,
+                            "{d} {angle} {h} {s}: rib volume"
+                        );
+                        assert!(
+                            rel(t.slab_areas_m2[0], m.interface_area_adhesive_m2) < 0.01,
+                            "{d} {angle} {h} {s}"
+                        );
+                        assert!(
+                            rel(t.slab_areas_m2[1], m.interface_area_free_m2) < 0.01,
+                            "{d} {angle} {h} {s}"
+                        );
+                        assert!(m.f_r > 0.0 && m.rib_volume_m3 > 0.0);
+                        valid += 1;
+                    }
+                    Err(e) => {
+                        assert!(
+                            overlaps(angle, h, s),
+                            "rejected a valid design {d} {angle} {h} {s}: {e}"
+                        );
+                        assert!(e.to_string().contains("bar.ribs.base_width"), "{e}");
+                        rejected += 1;
                     }
                 }
             }
         }
     }
-    assert!(
-        valid > 200 && rejected >= 8,
-        "{valid} valid, {rejected} rejected"
-    );
+    (valid, rejected)
 }

@@ -187,15 +187,19 @@ fn every_design_in_the_standards_ranges_meshes_or_is_refused_for_overlapping_rib
     let designs = designs();
     assert!(designs.len() >= 30);
     // Two workers: gmsh runs single-threaded, the machines have two cores.
+    // Each takes the next design when it is free: the designs' times differ
+    // by 10× (the rib count sets OpenCASCADE's time).
+    let next = std::sync::atomic::AtomicUsize::new(0);
     let results: Vec<Result<bool, String>> = std::thread::scope(|scope| {
         let workers: Vec<_> = (0..2)
-            .map(|w| {
-                let designs = &designs;
+            .map(|_| {
+                let (designs, next) = (&designs, &next);
                 scope.spawn(move || {
-                    (w..designs.len())
-                        .step_by(2)
-                        .map(|i| (i, check(i, &designs[i])))
-                        .collect::<Vec<_>>()
+                    std::iter::from_fn(|| {
+                        let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                        (i < designs.len()).then(|| (i, check(i, &designs[i])))
+                    })
+                    .collect::<Vec<_>>()
                 })
             })
             .collect();
