@@ -19,9 +19,6 @@ pub struct Unfolded {
     /// Per node of the whole, the signs (±1) of x, y, z of the reflection
     /// from its source: a vector field is `sign ∘ v(source)`.
     pub node_reflection: Vec<[f64; 3]>,
-    /// The same per tet: a tensor component ij is multiplied by
-    /// sign_i · sign_j.
-    pub tet_reflection: Vec<[f64; 3]>,
     /// Interface element of the part each element of the whole is the image of.
     pub interface_source: Vec<u32>,
     /// Per interface element of the whole, +1 or −1: the sign of its frame's
@@ -58,7 +55,6 @@ fn identity(m: &Model) -> Unfolded {
         node_source: (0..m.nodes.len() as u32).collect(),
         tet_source: (0..m.tets.len() as u32).collect(),
         node_reflection: vec![[1.0; 3]; m.nodes.len()],
-        tet_reflection: vec![[1.0; 3]; m.tets.len()],
         interface_source: (0..m.interfaces.len() as u32).collect(),
         interface_h_sign: vec![1.0; m.interfaces.len()],
     }
@@ -72,7 +68,6 @@ fn mirror(part: Unfolded, axis: usize) -> Unfolded {
         mut node_source,
         mut tet_source,
         mut node_reflection,
-        mut tet_reflection,
         mut interface_source,
         mut interface_h_sign,
     } = part;
@@ -111,7 +106,6 @@ fn mirror(part: Unfolded, axis: usize) -> Unfolded {
         t.swap(1, 2);
         tets.push(t);
         tet_source.push(tet_source[i]);
-        tet_reflection.push(reflect(tet_reflection[i]));
     }
     let mut interfaces = m.interfaces.clone();
     for (k, e) in m.interfaces.iter().enumerate() {
@@ -178,7 +172,6 @@ fn mirror(part: Unfolded, axis: usize) -> Unfolded {
         node_source,
         tet_source,
         node_reflection,
-        tet_reflection,
         interface_source,
         interface_h_sign,
     }
