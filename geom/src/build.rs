@@ -344,6 +344,7 @@ fn group_counts(
         Symmetry::Full => &[],
         Symmetry::Half => &[groups::SYMMETRY_Y],
         Symmetry::Quarter => &[groups::SYMMETRY_X, groups::SYMMETRY_Y],
+        Symmetry::HalfTurn => &[groups::HALF_TURN_Y],
     };
     for &name in [
         groups::STEEL,

@@ -11,6 +11,11 @@
 //! fragments, uses the quarter of the cube and of the plane, and adds the
 //! groups `symmetry_x` / `symmetry_y` (all faces on x = 0 / y = 0); a half
 //! model (herringbone bars) does the same with y ≥ 0 and `symmetry_y` alone.
+//! A half-turn half (spiral bars) keeps y ≥ 0 too, imprints the axis on the
+//! cut face so that its sides x > 0 and x < 0 are distinct faces,
+//! declares each x < 0 face the half-turn image of its x > 0 twin
+//! (`Periodic Surface … Rotate`: gmsh meshes them as images of each other)
+//! and groups them all as `half_turn_y`.
 //! Entities are found by bounding
 //! box with `Geometry.OCCBoundsUseStl = 1` (tight boxes on curved faces),
 //! never by literal tag. Mesh sizes come from `DefineConstant`s so that the
@@ -39,6 +44,10 @@ pub mod groups {
     pub const SYMMETRY_X: &str = "symmetry_x";
     /// Faces (steel and concrete) on the mirror plane y = 0 of a quarter or half model.
     pub const SYMMETRY_Y: &str = "symmetry_y";
+    /// Faces (steel and concrete) on the cut plane y = 0 of a half-turn half
+    /// model: those at x < 0 are meshed as the half-turn images of those at
+    /// x > 0.
+    pub const HALF_TURN_Y: &str = "half_turn_y";
 }
 
 /// Model units of a ribbed bar's script per metre: the solid is built in
@@ -342,6 +351,16 @@ fn geo_cube(w: &mut String, layout: &Layout) {
             ["-L / 2", "0"],
             ["L", "L / 2"],
         ),
+        Symmetry::HalfTurn => (
+            Some(
+                "Half model: keep the part y >= 0 of the bar; the half-turn about the\n\
+                  // axis maps the spiral specimen onto itself and the cut face's side\n\
+                  // x < 0 onto its side x > 0.",
+            ),
+            "-(r_out + R)",
+            ["-L / 2", "0"],
+            ["L", "L / 2"],
+        ),
         Symmetry::Quarter => (
             Some(
                 "Quarter model: keep the part x >= 0, y >= 0 of the bar; the planes x = 0\n\
@@ -366,6 +385,20 @@ fn geo_cube(w: &mut String, layout: &Layout) {
              bar() = BooleanIntersection{{ Volume{{bar()}}; Delete; }}{{ Volume{{qb}}; Delete; }};"
         );
     }
+    // The axis line imprinted on the cut face splits it at x = 0 into the two
+    // faces the half-turn maps onto each other; cutting the bar there would
+    // cut every rib (2.7× the boolean time on r1-coarse).
+    let axis = if layout.symmetry == Symmetry::HalfTurn {
+        let _ = writeln!(
+            w,
+            "// The bar axis, imprinted on the cut face by the fragments below.\n\
+             pa = newp; Point(pa) = {{0, 0, z_lo}}; pb = newp; Point(pb) = {{0, 0, z_hi}};\n\
+             axis = newc; Line(axis) = {{pa, pb}};"
+        );
+        " Curve{axis};"
+    } else {
+        ""
+    };
     let [cx0, cy0] = c0;
     let [csx, csy] = cs;
     let _ = writeln!(
@@ -375,7 +408,7 @@ fn geo_cube(w: &mut String, layout: &Layout) {
          cube = newv; Box(cube) = {{{cx0}, {cy0}, 0, {csx}, {csy}, L}};",
         part = match layout.symmetry {
             Symmetry::Full => "",
-            Symmetry::Half => " (its half y >= 0)",
+            Symmetry::Half | Symmetry::HalfTurn => " (its half y >= 0)",
             Symmetry::Quarter => " (its quarter x, y >= 0)",
         },
         cut_note = if has_cut {
@@ -389,12 +422,17 @@ fn geo_cube(w: &mut String, layout: &Layout) {
         let _ = writeln!(
             w,
             "cut = news; Rectangle(cut) = {{{cx0}, {cy0}, l_adh, {csx}, {csy}}};\n\
-             BooleanFragments{{ Volume{{bar(), cube}}; Delete; }}{{ Surface{{cut}}; Delete; }}"
+             BooleanFragments{{ Volume{{bar(), cube}}; Delete; }}{{ Surface{{cut}};{axis} Delete; }}"
         );
     } else {
         let _ = writeln!(
             w,
-            "BooleanFragments{{ Volume{{bar(), cube}}; Delete; }}{{ }}"
+            "BooleanFragments{{ Volume{{bar(), cube}}; Delete; }}{{{tool} }}",
+            tool = if axis.is_empty() {
+                ""
+            } else {
+                " Curve{axis}; Delete;"
+            }
         );
     }
 }
@@ -464,6 +502,7 @@ fn geo_groups(w: &mut String, layout: &Layout) {
     let planes: &[(&str, &str)] = match layout.symmetry {
         Symmetry::Full => &[],
         Symmetry::Half => &[("sym_y", groups::SYMMETRY_Y)],
+        Symmetry::HalfTurn => &[("sym_y", groups::HALF_TURN_Y)],
         Symmetry::Quarter => &[("sym_x", groups::SYMMETRY_X), ("sym_y", groups::SYMMETRY_Y)],
     };
     if !planes.is_empty() {
@@ -475,7 +514,7 @@ fn geo_groups(w: &mut String, layout: &Layout) {
         );
     }
     for (var, group) in planes {
-        let lo_x = if layout.symmetry == Symmetry::Half {
+        let lo_x = if layout.symmetry != Symmetry::Quarter {
             "-span"
         } else {
             "-tol"
@@ -491,6 +530,39 @@ fn geo_groups(w: &mut String, layout: &Layout) {
              Physical Surface(\"{group}\") = {{{var}()}};"
         );
     }
+    if layout.symmetry == Symmetry::HalfTurn {
+        geo_half_turn_pairs(w);
+    }
+}
+
+/// Pairs each face of the cut plane at x < 0 with its half-turn image at
+/// x > 0 (the x-mirror of its box, same z range) and has gmsh mesh it as
+/// that image. A face without its twin stops the script: the mesh stage
+/// would otherwise get a cut face whose nodes do not pair.
+fn geo_half_turn_pairs(w: &mut String) {
+    let _ = writeln!(
+        w,
+        "\n// Half-turn pairs on y = 0: each face at x < 0 is meshed as the image of\n\
+         // its twin at x > 0 under the half-turn about the axis.\n\
+         ptol = 1e-3 * R;\n\
+         ht_master() = {{}}; ht_slave() = {{}};\n\
+         For i In {{0:#sym_y() - 1}}\n\
+         \x20 bm() = BoundingBox Surface{{sym_y(i)}};\n\
+         \x20 If (bm(0) > -ptol)\n\
+         \x20   For j In {{0:#sym_y() - 1}}\n\
+         \x20     bs() = BoundingBox Surface{{sym_y(j)}};\n\
+         \x20     If (bs(3) < ptol && Fabs(bs(0) + bm(3)) < ptol && Fabs(bs(3) + bm(0)) < ptol && Fabs(bs(2) - bm(2)) < ptol && Fabs(bs(5) - bm(5)) < ptol)\n\
+         \x20       ht_master() += sym_y(i); ht_slave() += sym_y(j);\n\
+         \x20     EndIf\n\
+         \x20   EndFor\n\
+         \x20 EndIf\n\
+         EndFor\n\
+         If (2 * #ht_master() != #sym_y())\n\
+         \x20 Error(\"half-turn half: %g of the %g faces on y = 0 have a twin at x < 0\", #ht_master(), #sym_y());\n\
+         \x20 Abort;\n\
+         EndIf\n\
+         Periodic Surface {{ht_slave()}} = {{ht_master()}} Rotate {{{{0, 0, 1}}, {{0, 0, 0}}, Pi}};"
+    );
 }
 
 /// The size field (SPEC §9).

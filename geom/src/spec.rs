@@ -43,7 +43,9 @@ pub enum RawSymmetry {
     #[default]
     Auto,
     Full,
-    /// The half y ≥ 0: a smooth bar, or a herringbone bar without phase.
+    /// The half y ≥ 0: a smooth bar or a herringbone bar without phase (its
+    /// mirror plane), a spiral bar without phase (the half-turn about the
+    /// axis).
     Half,
     Quarter,
 }
@@ -55,8 +57,10 @@ pub enum RawSymmetry {
 /// herringbone bar whose side B is the mirror image of side A in the plane
 /// of the longitudinal ribs (y = 0) with no axial phase between the sides is
 /// mirror-symmetric in that plane alone: the half y ≥ 0. A spiral bar
-/// (side B rotated) has no mirror plane through its axis and is modelled
-/// whole.
+/// (side B rotated) without phase has no mirror plane through its axis, but
+/// the half-turn about the axis maps it onto itself: its half y ≥ 0 with
+/// the cut face's two sides tied by u(−x, 0, z) = R u(x, 0, z),
+/// R = diag(−1, −1, 1) (`HalfTurn`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "lowercase")]
 pub enum Symmetry {
@@ -65,6 +69,11 @@ pub enum Symmetry {
     /// The half y ≥ 0, the plane y = 0 held normal.
     Half,
     Quarter,
+    /// The half y ≥ 0 of a specimen symmetric under the half-turn about the
+    /// bar axis: each point (x, 0, z) of the cut face, x < 0, moves as the
+    /// half-turn image of (−x, 0, z).
+    #[serde(rename = "half_turn")]
+    HalfTurn,
 }
 
 impl Symmetry {
@@ -72,7 +81,7 @@ impl Symmetry {
     pub fn fraction(self) -> f64 {
         match self {
             Symmetry::Full => 1.0,
-            Symmetry::Half => 0.5,
+            Symmetry::Half | Symmetry::HalfTurn => 0.5,
             Symmetry::Quarter => 0.25,
         }
     }
@@ -410,40 +419,43 @@ pub fn resolve(bar: &RawBar, specimen: &RawSpecimen) -> Result<(Bar, Specimen), 
 
 /// The modelled part `raw` asks for, checked against the bar's symmetry.
 fn resolve_symmetry(raw: RawSymmetry, bar: &Bar) -> Result<Symmetry, SpecError> {
-    // Only a herringbone bar without phase between its sides has the mirror
-    // plane y = 0 (the plane of its longitudinal ribs).
-    let mirror_plane = match &bar.ribs {
-        None => Ok(()),
-        Some(ribs) => match ribs.transverse.side_b {
-            SideB::Rotated => Err(
-                "side B is rotated (a spiral bar): the specimen is symmetric under the \
-                 half-turn about the axis, not in a mirror plane",
-            ),
-            SideB::Mirrored if ribs.transverse.phase != 0.0 => Err(
+    // The half y ≥ 0 a bar admits: a mirror half for a smooth or herringbone
+    // bar, a half-turn half for a spiral one; with a phase between the
+    // sides, none.
+    let half = match &bar.ribs {
+        None => Ok(Symmetry::Half),
+        Some(ribs) if ribs.transverse.phase != 0.0 => Err(match ribs.transverse.side_b {
+            SideB::Rotated => {
                 "side B's ribs are shifted by bar.ribs.phase, so they are not the \
-                 mirror images of side A's",
-            ),
-            SideB::Mirrored => Ok(()),
-        },
-    };
-    let refuse = |what: &str, why: &str| SpecError::Inconsistent {
-        key: "specimen.symmetry".into(),
-        problem: format!("{what} needs a mirror plane: {why}; use full or auto"),
+                 half-turn images of side A's"
+            }
+            SideB::Mirrored => {
+                "side B's ribs are shifted by bar.ribs.phase, so they are not the \
+                 mirror images of side A's"
+            }
+        }),
+        Some(ribs) => Ok(match ribs.transverse.side_b {
+            SideB::Rotated => Symmetry::HalfTurn,
+            SideB::Mirrored => Symmetry::Half,
+        }),
     };
     match (raw, bar.kind) {
         (RawSymmetry::Full, _) => Ok(Symmetry::Full),
         (RawSymmetry::Auto | RawSymmetry::Quarter, BarKind::Smooth) => Ok(Symmetry::Quarter),
-        (RawSymmetry::Half, _) => mirror_plane
-            .map(|_| Symmetry::Half)
-            .map_err(|why| refuse("half", why)),
-        (RawSymmetry::Auto, BarKind::Ribbed) => {
-            Ok(mirror_plane.map_or(Symmetry::Full, |_| Symmetry::Half))
-        }
+        (RawSymmetry::Half, _) => half.map_err(|why| SpecError::Inconsistent {
+            key: "specimen.symmetry".into(),
+            problem: format!("half needs a symmetric half: {why}; use full or auto"),
+        }),
+        (RawSymmetry::Auto, BarKind::Ribbed) => Ok(match half {
+            Ok(Symmetry::Half) => Symmetry::Half,
+            _ => Symmetry::Full,
+        }),
         (RawSymmetry::Quarter, BarKind::Ribbed) => Err(SpecError::Inconsistent {
             key: "specimen.symmetry".into(),
             problem: "quarter needs a smooth bar: a ribbed bar has at most one mirror \
-                      plane through its axis (herringbone: use half), so a quarter model \
-                      would not be the specimen; use half, full or auto"
+                      plane through its axis (herringbone) or the half-turn about it \
+                      (spiral), so a quarter model would not be the specimen; use half, \
+                      full or auto"
                 .into(),
         }),
     }
@@ -802,13 +814,15 @@ mod tests {
 
     /// `auto` models the half y ≥ 0 of a herringbone bar without phase (its
     /// one mirror plane is that of the longitudinal ribs) and the whole of a
-    /// spiral one or of a herringbone one with phase; `half` where there is
-    /// no mirror plane is refused naming the key and the reason (issue 14).
+    /// spiral one or of a herringbone one with phase; `half` on a spiral bar
+    /// without phase is its half-turn half; `half` with a phase is refused
+    /// naming the key and the reason (issue 14).
     #[test]
-    fn symmetry_half_only_for_a_mirror_plane() {
+    fn symmetry_half_only_for_a_symmetric_half() {
         let hb = "{kind: ribbed, diameter: 8 mm, ribs: {side_b: mirrored}}";
         let hb_phase = "{kind: ribbed, diameter: 8 mm, ribs: {side_b: mirrored, phase: 1 mm}}";
         let spiral = "{kind: ribbed, diameter: 8 mm, ribs: {side_b: rotated}}";
+        let spiral_phase = "{kind: ribbed, diameter: 8 mm, ribs: {side_b: rotated, phase: 1 mm}}";
         let smooth = "{kind: smooth, diameter: 8 mm}";
         let sym = |bar: &str, sp: &str| try_resolve(bar, sp).unwrap().1.symmetry;
         assert_eq!(sym(hb, "{}"), Symmetry::Half);
@@ -816,12 +830,19 @@ mod tests {
         assert_eq!(sym(hb, "{symmetry: full}"), Symmetry::Full);
         assert_eq!(sym(hb_phase, "{}"), Symmetry::Full);
         assert_eq!(sym(spiral, "{}"), Symmetry::Full);
+        assert_eq!(sym(spiral, "{symmetry: half}"), Symmetry::HalfTurn);
         assert_eq!(sym(smooth, "{symmetry: half}"), Symmetry::Half);
         assert_eq!(Symmetry::Half.fraction(), 0.5);
-        for (bar, why) in [(spiral, "half-turn"), (hb_phase, "bar.ribs.phase")] {
+        assert_eq!(Symmetry::HalfTurn.fraction(), 0.5);
+        for (bar, why) in [
+            (spiral_phase, "half-turn images"),
+            (hb_phase, "mirror images"),
+        ] {
             let msg = err(bar, "{symmetry: half}");
             assert!(
-                msg.contains("specimen.symmetry") && msg.contains(why),
+                msg.contains("specimen.symmetry")
+                    && msg.contains(why)
+                    && msg.contains("bar.ribs.phase"),
                 "{msg}"
             );
         }

@@ -36,6 +36,9 @@ pub const OPTIONAL_SURFACES: [&str; 1] = ["interface_free"];
 /// concrete faces). Both present: [`Symmetry::Quarter`]; y = 0 alone:
 /// [`Symmetry::Half`]; none: [`Symmetry::Full`]; x = 0 alone is an error.
 pub const SYMMETRY_SURFACES: [&str; 2] = ["symmetry_x", "symmetry_y"];
+/// Physical surface of the cut plane y = 0 of a half-turn half model
+/// ([`Symmetry::HalfTurn`]), its side x < 0 meshed as the image of x > 0.
+pub const HALF_TURN_SURFACE: &str = "half_turn_y";
 
 /// Counts and measures of a built model, written as `mesh.json`.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
@@ -96,6 +99,7 @@ mod symmetry_name {
             Symmetry::Full => "full",
             Symmetry::Half => "half",
             Symmetry::Quarter => "quarter",
+            Symmetry::HalfTurn => "half_turn",
         })
     }
 
@@ -104,8 +108,9 @@ mod symmetry_name {
             "full" => Ok(Symmetry::Full),
             "half" => Ok(Symmetry::Half),
             "quarter" => Ok(Symmetry::Quarter),
+            "half_turn" => Ok(Symmetry::HalfTurn),
             other => Err(serde::de::Error::custom(format!(
-                "symmetry {other:?}: expected \"full\", \"half\" or \"quarter\""
+                "symmetry {other:?}: expected \"full\", \"half\", \"half_turn\" or \"quarter\""
             ))),
         }
     }
@@ -249,6 +254,13 @@ pub fn build_model(
         adhesive_length,
         symmetry,
     };
+    if symmetry == Symmetry::HalfTurn {
+        // A cut face gmsh did not mesh as its own half-turn image cannot be
+        // tied node to node: stop here, naming the first unpaired node.
+        model
+            .half_turn_twins()
+            .map_err(|detail| topology_error(raw, detail))?;
+    }
     Ok((model, report))
 }
 
@@ -608,14 +620,25 @@ fn mirror_set(raw: &RawMesh, numbering: &Numbering, group: &str) -> Result<Vec<u
 
 /// The boundary-condition node sets and the symmetry the mirror-plane
 /// groups declare (both: quarter; y = 0 alone: half; none: full; x = 0
-/// alone is an error).
+/// alone is an error; the half-turn cut plane alone: half-turn).
 fn node_sets(raw: &RawMesh, numbering: &Numbering) -> Result<(NodeSets, Symmetry), MeshError> {
-    let present = SYMMETRY_SURFACES.map(|g| raw.surfaces.get(g).is_some_and(|v| !v.is_empty()));
-    let symmetry = match present {
-        [true, true] => Symmetry::Quarter,
-        [false, true] => Symmetry::Half,
-        [false, false] => Symmetry::Full,
-        [true, false] => {
+    let has = |g: &str| raw.surfaces.get(g).is_some_and(|v| !v.is_empty());
+    let present = SYMMETRY_SURFACES.map(has);
+    let symmetry = match (present, has(HALF_TURN_SURFACE)) {
+        ([false, false], true) => Symmetry::HalfTurn,
+        (_, true) => {
+            return Err(topology_error(
+                raw,
+                format!(
+                    "physical surface \"{HALF_TURN_SURFACE}\" (a half-turn half model) beside \
+                     mirror-plane groups: a model has one kind of symmetry"
+                ),
+            ));
+        }
+        ([true, true], false) => Symmetry::Quarter,
+        ([false, true], false) => Symmetry::Half,
+        ([false, false], false) => Symmetry::Full,
+        ([true, false], false) => {
             return Err(missing_group(
                 raw,
                 SYMMETRY_SURFACES[1],
@@ -628,13 +651,18 @@ fn node_sets(raw: &RawMesh, numbering: &Numbering) -> Result<(NodeSets, Symmetry
         }
     };
     let set = |group: &str, side: Region| side_set(raw, numbering, group, side);
+    let plane_y = if symmetry == Symmetry::HalfTurn {
+        HALF_TURN_SURFACE
+    } else {
+        SYMMETRY_SURFACES[1]
+    };
     let node_sets = NodeSets {
         bar_loaded_end: set("bar_loaded_end", Region::Steel)?,
         bar_free_end: set("bar_free_end", Region::Steel)?,
         concrete_bearing_face: set("concrete_bearing_face", Region::Concrete)?,
         concrete_free_face: set("concrete_free_face", Region::Concrete)?,
         symmetry_x: mirror_set(raw, numbering, SYMMETRY_SURFACES[0])?,
-        symmetry_y: mirror_set(raw, numbering, SYMMETRY_SURFACES[1])?,
+        symmetry_y: mirror_set(raw, numbering, plane_y)?,
     };
     Ok((node_sets, symmetry))
 }

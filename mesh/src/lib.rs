@@ -20,6 +20,7 @@
 pub mod build;
 pub mod error;
 pub mod gmsh_run;
+pub mod half_turn;
 pub mod model;
 pub mod read;
 pub mod spec;
@@ -29,6 +30,7 @@ pub mod vtu;
 pub use build::{build_model, MeshReport, Timings};
 pub use error::MeshError;
 pub use gmsh_run::{gmsh_args, run_gmsh, Gmsh, GmshTiming};
+pub use half_turn::HalfTurnTwins;
 pub use model::*;
 pub use read::{read_msh, RawMesh};
 pub use spec::{MeshSpec, RawMeshSpec};

@@ -57,7 +57,9 @@ pub struct NodeSets {
     /// Nodes (both sides) on the symmetry plane x = 0 of a reduced model: u_x = 0.
     #[serde(default)]
     pub symmetry_x: Vec<u32>,
-    /// Nodes (both sides) on the symmetry plane y = 0 of a reduced model: u_y = 0.
+    /// Nodes (both sides) on the symmetry plane y = 0 of a reduced model:
+    /// u_y = 0 on a mirror plane; tied in pairs by the half-turn
+    /// ([`Model::half_turn_twins`]) in a [`Symmetry::HalfTurn`] model.
     #[serde(default)]
     pub symmetry_y: Vec<u32>,
 }
@@ -66,6 +68,8 @@ pub struct NodeSets {
 /// the mirror planes x = 0 and y = 0; the quarter x ≥ 0, y ≥ 0 with those
 /// planes held normal gives the whole specimen's response at a quarter of
 /// the cost. A herringbone bar has the plane y = 0 alone: the half y ≥ 0.
+/// A spiral bar has the half-turn about its axis: the half y ≥ 0 whose cut
+/// face's side x < 0 moves as the half-turn image of its side x > 0.
 /// Forces measured on the model are multiplied by
 /// [`Symmetry::force_factor`].
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -75,6 +79,7 @@ pub enum Symmetry {
     // After Quarter: model files store the variant's index.
     Quarter,
     Half,
+    HalfTurn,
 }
 
 impl Symmetry {
@@ -82,7 +87,7 @@ impl Symmetry {
     pub fn force_factor(self) -> f64 {
         match self {
             Symmetry::Full => 1.0,
-            Symmetry::Half => 2.0,
+            Symmetry::Half | Symmetry::HalfTurn => 2.0,
             Symmetry::Quarter => 4.0,
         }
     }

@@ -145,18 +145,76 @@ fn full_mesh_has_no_symmetry_sets() {
 /// checks (issue 14: half models).
 #[test]
 fn half_herringbone_model() {
-    let dir = scratch("half-herringbone");
-    let bar: geom::spec::RawBar = serde_yaml::from_str(
-        "{kind: ribbed, diameter: 8 mm, ribs: {height: 0.52 mm, spacing: 5 mm, angle: 55 deg, \
-         side_b: mirrored}}",
-    )
+    half_model("mirrored", "{}", Symmetry::Half);
+}
+
+/// A spiral bar (side B rotated, no phase) with `symmetry: half` is the
+/// half-turn half: the same checks as the herringbone half, and gmsh's
+/// periodic meshing pairs every cut-plane node at x < 0 with a node at its
+/// half-turn image on the same side of the interface, to rounding
+/// (issue 14: the periodic node pairing is exact).
+#[test]
+fn half_turn_spiral_model() {
+    let m = half_model("rotated", "symmetry: half", Symmetry::HalfTurn);
+    let twins = m.half_turn_twins().unwrap();
+    let plane = &m.node_sets.symmetry_y;
+    assert_eq!(2 * twins.pairs.len() + twins.axis.len(), plane.len());
+    assert!(twins.axis.len() >= 3, "the axis is a meshed line");
+    let worst = twins
+        .pairs
+        .iter()
+        .map(|&(a, b)| {
+            let (p, q) = (m.nodes[a as usize], m.nodes[b as usize]);
+            assert!(p[0] < 0.0 && q[0] > 0.0);
+            assert_eq!(m.node_region[a as usize], m.node_region[b as usize]);
+            (p[0] + q[0])
+                .abs()
+                .max((p[2] - q[2]).abs())
+                .max(p[1].abs() + q[1].abs())
+        })
+        .fold(0.0f64, f64::max);
+    assert!(worst <= 1e-12 * 0.008, "twins {worst:e} m off their images");
+    for &n in &twins.axis {
+        assert!(
+            m.nodes[n as usize][0].abs() <= 1e-12
+                && m.node_region[n as usize] == mesh::Region::Steel
+        );
+    }
+    // The whole's nodes are the half's and their half-turn images.
+    let whole = m.unfold();
+    for (i, p) in whole.model.nodes.iter().enumerate() {
+        let (q, r) = (
+            m.nodes[whole.node_source[i] as usize],
+            whole.node_reflection[i],
+        );
+        assert_eq!(*p, [r[0] * q[0], r[1] * q[1], r[2] * q[2]], "node {i}");
+        assert!(r == [1.0; 3] || r == [-1.0, -1.0, 1.0]);
+    }
+    assert!(whole.interface_h_sign.iter().all(|&s| s == 1.0));
+}
+
+/// Meshes the half model of a bar whose side B is `side_b`, with the extra
+/// specimen keys `symmetry`, and checks it and its unfolded whole.
+fn half_model(side_b: &str, symmetry: &str, expect: Symmetry) -> Model {
+    let dir = scratch(&format!("half-{side_b}"));
+    let bar: geom::spec::RawBar = serde_yaml::from_str(&format!(
+        "{{kind: ribbed, diameter: 8 mm, ribs: {{height: 0.52 mm, spacing: 5 mm, angle: 55 deg, \
+         side_b: {side_b}}}}}"
+    ))
     .unwrap();
-    let specimen: geom::spec::RawSpecimen = serde_yaml::from_str(
-        "{cube_side: 24 mm, adhesive_length: 10 mm, free_overhang: 2 mm, loaded_overhang: 4 mm}",
-    )
+    let extra = symmetry.trim_matches(|c| c == '{' || c == '}');
+    let specimen: geom::spec::RawSpecimen = serde_yaml::from_str(&format!(
+        "{{cube_side: 24 mm, adhesive_length: 10 mm, free_overhang: 2 mm, loaded_overhang: 4 mm\
+         {}{extra}}}",
+        if extra.is_empty() { "" } else { ", " }
+    ))
     .unwrap();
     let (bar, specimen) = geom::spec::resolve(&bar, &specimen).unwrap();
-    assert_eq!(specimen.symmetry, geom::spec::Symmetry::Half);
+    let geom_symmetry = match expect {
+        Symmetry::HalfTurn => geom::spec::Symmetry::HalfTurn,
+        _ => geom::spec::Symmetry::Half,
+    };
+    assert_eq!(specimen.symmetry, geom_symmetry);
     let built = geom::build_geometry(&bar, &specimen, gmsh(), &dir).unwrap();
     let spec = MeshSpec {
         h_interface: 1.6e-3,
@@ -166,7 +224,7 @@ fn half_herringbone_model() {
     let r = mesh_specimen(gmsh(), &dir.join("specimen.geo"), &spec, 0.008, 0.010, &dir).unwrap();
     let m = Model::load(&dir.join(mesh::MODEL_FILE)).unwrap();
     check_topology(&m);
-    assert_eq!((m.symmetry, r.symmetry), (Symmetry::Half, Symmetry::Half));
+    assert_eq!((m.symmetry, r.symmetry), (expect, expect));
     assert_eq!(m.symmetry.force_factor(), 2.0);
     assert!(m.nodes.iter().all(|p| p[1] > -1e-12));
     assert!(m.nodes.iter().any(|p| p[0] < -1e-3) && m.nodes.iter().any(|p| p[0] > 1e-3));
@@ -189,4 +247,6 @@ fn half_herringbone_model() {
     assert_eq!(whole.model.interfaces.len(), 2 * m.interfaces.len());
     let area = |model: &Model| model.interfaces.iter().map(|e| e.area).sum::<f64>();
     assert!((area(&whole.model) - 2.0 * area(&m)).abs() < 1e-9 * area(&m));
+    let _ = std::fs::remove_dir_all(&dir);
+    m
 }
