@@ -144,34 +144,103 @@ const NONE: u32 = u32::MAX;
 /// store of an unsymmetric element matrix (Mazars and FCZM consistent
 /// tangents) mixes K_ab and K_ba by the accident of the DOF numbering.
 const SWAP: u32 = 1 << 31;
-const POS: u32 = !SWAP;
+/// Set in a scatter-map entry whose two DOFs are tied with opposite signs
+/// (one of them the half-turn image of a DOF of the other's node): the
+/// entry enters negated.
+const NEG: u32 = 1 << 30;
+/// Set in a scatter-map entry (a, b), a ≠ b, whose two DOFs share one free
+/// index (a DOF and its tie): K_ab + K_ba both land on that diagonal.
+const FOLD: u32 = 1 << 29;
+const POS: u32 = FOLD - 1;
 const TET_LOWER: usize = 78;
 /// Lower-triangle entries of one node pair's 6×6 block (s_i, c_i).
 const PAIR_LOWER: usize = 21;
 
-/// Free/constrained numbering of the global DOFs.
+/// A DOF that moves as ± another one: u[dof] = sign · u[to] (the cut face
+/// of a half-turn half model, u(Rx) = R u(x)).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Tie {
+    pub dof: usize,
+    pub to: usize,
+    /// +1 or −1.
+    pub sign: f64,
+}
+
+/// Free/constrained numbering of the global DOFs. A tied DOF shares the free
+/// index of the DOF it is tied to, with a sign: the reduced system is
+/// Tᵀ K T with u = T u_free, so gathering sums a tie's entries into its
+/// free index and scattering copies the free value with the sign.
 #[derive(Debug, Clone, PartialEq)]
 pub struct DofMap {
     /// Free index of each global DOF, or `u32::MAX` when constrained.
     free: Vec<u32>,
+    /// Per global DOF, whether it moves as the negative of its free value
+    /// (empty when no DOF is tied).
+    negated: Vec<bool>,
+    /// The global DOF each free index belongs to (not a tied one).
+    owner: Vec<u32>,
     n_free: usize,
 }
 
 impl DofMap {
     /// `constrained`: global DOF indices (`3·node + component`), any order, repeats allowed.
     pub fn new(n_nodes: usize, constrained: &[usize]) -> Self {
+        Self::with_ties(n_nodes, constrained, &[]).expect("no ties, nothing to refuse")
+    }
+
+    /// As [`DofMap::new`], with `ties` between free DOFs. Refuses a tie of a
+    /// constrained DOF (the caller constrains both or neither), a tie to a
+    /// tied DOF and a DOF tied twice.
+    pub fn with_ties(n_nodes: usize, constrained: &[usize], ties: &[Tie]) -> Result<Self, String> {
+        const TIED: u32 = u32::MAX - 1;
         let mut free = vec![0u32; 3 * n_nodes];
         for &d in constrained {
             free[d] = NONE;
         }
-        let mut n_free = 0usize;
-        for f in free.iter_mut() {
-            if *f != NONE {
-                *f = n_free as u32;
-                n_free += 1;
+        for t in ties {
+            if t.dof >= free.len() || t.to >= free.len() || t.dof == t.to {
+                return Err(format!("tie {} → {}: no such pair of DOFs", t.dof, t.to));
+            }
+            if free[t.dof] == NONE || free[t.to] == NONE {
+                return Err(format!(
+                    "tie {} → {}: a constrained DOF cannot be tied (constrain both)",
+                    t.dof, t.to
+                ));
+            }
+            if free[t.dof] == TIED {
+                return Err(format!("DOF {} is tied twice", t.dof));
+            }
+            free[t.dof] = TIED;
+        }
+        let mut owner = Vec::with_capacity(free.len());
+        for (d, f) in free.iter_mut().enumerate() {
+            if *f == 0 {
+                *f = owner.len() as u32;
+                owner.push(d as u32);
             }
         }
-        Self { free, n_free }
+        let mut negated = if ties.is_empty() {
+            Vec::new()
+        } else {
+            vec![false; free.len()]
+        };
+        for t in ties {
+            if free[t.to] == TIED {
+                return Err(format!(
+                    "tie {} → {}: the target is itself tied",
+                    t.dof, t.to
+                ));
+            }
+            free[t.dof] = free[t.to];
+            negated[t.dof] = t.sign < 0.0;
+        }
+        let n_free = owner.len();
+        Ok(Self {
+            free,
+            negated,
+            owner,
+            n_free,
+        })
     }
     pub fn n_total(&self) -> usize {
         self.free.len()
@@ -179,24 +248,50 @@ impl DofMap {
     pub fn n_free(&self) -> usize {
         self.n_free
     }
-    /// Free index of global DOF `d`, if free.
+    /// Free index of global DOF `d` (its tie's for a tied DOF), if free.
     pub fn free_index(&self, d: usize) -> Option<usize> {
         let f = self.free[d];
         (f != NONE).then_some(f as usize)
     }
-    /// Copies the free entries of a global vector into `out` (length n_free).
+    /// Free index and sign of global DOF `d`: u[d] = sign · u_free[index].
+    pub fn signed_index(&self, d: usize) -> Option<(usize, f64)> {
+        self.free_index(d).map(|f| (f, self.sign(d)))
+    }
+    /// Free index of `d` when `d` owns it (free and not tied).
+    pub fn owned_index(&self, d: usize) -> Option<usize> {
+        self.free_index(d).filter(|&f| self.owner[f] as usize == d)
+    }
+    fn sign(&self, d: usize) -> f64 {
+        if self.negated.get(d).copied().unwrap_or(false) {
+            -1.0
+        } else {
+            1.0
+        }
+    }
+    /// Sums the free entries of a global vector of forces into `out`
+    /// (length n_free): a tied DOF's entry adds to its free index with its
+    /// sign (Tᵀ f).
     pub fn gather(&self, global: &[f64], out: &mut [f64]) {
+        if self.negated.is_empty() {
+            for (d, &f) in self.free.iter().enumerate() {
+                if f != NONE {
+                    out[f as usize] = global[d];
+                }
+            }
+            return;
+        }
+        out.iter_mut().for_each(|v| *v = 0.0);
         for (d, &f) in self.free.iter().enumerate() {
             if f != NONE {
-                out[f as usize] = global[d];
+                out[f as usize] += self.sign(d) * global[d];
             }
         }
     }
-    /// Adds `scale · free` into the free entries of a global vector.
+    /// Adds `scale · free` into the free entries of a global vector (T u).
     pub fn scatter_add(&self, free: &[f64], scale: f64, global: &mut [f64]) {
         for (d, &f) in self.free.iter().enumerate() {
             if f != NONE {
-                global[d] += scale * free[f as usize];
+                global[d] += self.sign(d) * scale * free[f as usize];
             }
         }
     }
@@ -512,8 +607,21 @@ impl System {
         load_rates: &[(usize, f64)],
         active_interfaces: &[bool],
     ) -> Result<Self, AssemblyError> {
+        Self::with_ties(model, constrained, &[], load_rates, active_interfaces)
+    }
+
+    /// As [`System::new`], with `ties` between free DOFs
+    /// ([`DofMap::with_ties`]).
+    pub fn with_ties(
+        model: &Model,
+        constrained: &[usize],
+        ties: &[Tie],
+        load_rates: &[(usize, f64)],
+        active_interfaces: &[bool],
+    ) -> Result<Self, AssemblyError> {
         check_model(model, active_interfaces)?;
-        let dofs = DofMap::new(model.nodes.len(), constrained);
+        let dofs = DofMap::with_ties(model.nodes.len(), constrained, ties)
+            .map_err(AssemblyError::Model)?;
         let tet_geom = model
             .tets
             .par_iter()
@@ -895,13 +1003,35 @@ fn lower_pattern(
     iface_active: &[usize],
 ) -> Result<(Vec<usize>, Vec<usize>), AssemblyError> {
     let n_nodes = model.nodes.len();
+    // The nodes owning a node's free DOFs: itself, or the nodes its tied
+    // DOFs move with (their columns hold its couplings).
+    let reps = |n: u32| -> [u32; 3] {
+        std::array::from_fn(|c| {
+            dofs.free_index(3 * n as usize + c)
+                .map_or(n, |f| dofs.owner[f] / 3)
+        })
+    };
+    let tied = !dofs.negated.is_empty();
     // Node graph (lower: neighbour ≥ node), from tets and node pairs.
     let mut adj: Vec<Vec<u32>> = vec![Vec::new(); n_nodes];
+    let mut link = |a: u32, b: u32| {
+        if tied {
+            for ra in reps(a) {
+                for rb in reps(b) {
+                    let (hi, lo) = if ra >= rb { (ra, rb) } else { (rb, ra) };
+                    adj[lo as usize].push(hi);
+                }
+            }
+        } else {
+            let (hi, lo) = if a >= b { (a, b) } else { (b, a) };
+            adj[lo as usize].push(hi);
+        }
+    };
     for t in &model.tets {
         for &a in t {
             for &b in t {
                 if a >= b {
-                    adj[b as usize].push(a);
+                    link(a, b);
                 }
             }
         }
@@ -910,8 +1040,7 @@ fn lower_pattern(
         let n = &model.interfaces[i].nodes;
         for p in 0..3 {
             for (a, b) in [(n[p], n[p]), (n[p + 3], n[p + 3]), (n[p], n[p + 3])] {
-                let (hi, lo) = if a >= b { (a, b) } else { (b, a) };
-                adj[lo as usize].push(hi);
+                link(a, b);
             }
         }
     }
@@ -924,12 +1053,12 @@ fn lower_pattern(
     col_ptr.push(0);
     for (b, nbrs) in adj.iter().enumerate() {
         for cb in 0..3 {
-            let Some(j) = dofs.free_index(3 * b + cb) else {
+            let Some(j) = dofs.owned_index(3 * b + cb) else {
                 continue;
             };
             for &a in nbrs {
                 for ca in 0..3 {
-                    if let Some(i) = dofs.free_index(3 * a as usize + ca) {
+                    if let Some(i) = dofs.owned_index(3 * a as usize + ca) {
                         if i >= j {
                             row_idx.push(i);
                         }
@@ -962,9 +1091,15 @@ fn scatter_maps(
     row_idx: &[usize],
 ) -> ScatterMaps {
     let position = |gi: usize, gj: usize| -> u32 {
-        match (dofs.free_index(gi), dofs.free_index(gj)) {
-            (Some(i), Some(j)) => {
-                let (r, c, flag) = if i >= j { (i, j, 0) } else { (j, i, SWAP) };
+        match (dofs.signed_index(gi), dofs.signed_index(gj)) {
+            (Some((i, si)), Some((j, sj))) => {
+                let (r, c, mut flag) = if i >= j { (i, j, 0) } else { (j, i, SWAP) };
+                if si * sj < 0.0 {
+                    flag |= NEG;
+                }
+                if i == j && gi != gj {
+                    flag |= FOLD;
+                }
                 let col = &row_idx[col_ptr[c]..col_ptr[c + 1]];
                 let k = col
                     .binary_search(&r)
@@ -1033,9 +1168,13 @@ fn load_couplings(
         let mut out = Vec::new();
         for (a, &da) in d.iter().enumerate() {
             for (b, &db) in d.iter().enumerate() {
-                let (kind, free, weight) = match (dofs.free_index(da), dofs.free_index(db)) {
-                    (Some(fa), None) if rate[db] != 0.0 => (CouplingKind::Column, fa, rate[db]),
-                    (None, Some(fb)) if rate[da] != 0.0 => (CouplingKind::Row, fb, rate[da]),
+                let (kind, free, weight) = match (dofs.signed_index(da), dofs.signed_index(db)) {
+                    (Some((fa, sa)), None) if rate[db] != 0.0 => {
+                        (CouplingKind::Column, fa, sa * rate[db])
+                    }
+                    (None, Some((fb, sb))) if rate[da] != 0.0 => {
+                        (CouplingKind::Row, fb, sb * rate[da])
+                    }
                     (None, None) if rate[da] != 0.0 && rate[db] != 0.0 => {
                         (CouplingKind::Diagonal, 0, rate[da] * rate[db])
                     }
@@ -1091,11 +1230,19 @@ fn scatter_block<const N: usize>(
             }
             let pos = (e & POS) as usize;
             let (kab, kba) = (k[N * a + b], k[N * b + a]);
-            let (lo, up) = if e & SWAP == 0 {
+            let (mut lo, mut up) = if e & SWAP == 0 {
                 (kab, kba)
             } else {
                 (kba, kab)
             };
+            if e & FOLD != 0 {
+                lo = kab + kba;
+                up = lo;
+            }
+            if e & NEG != 0 {
+                lo = -lo;
+                up = -up;
+            }
             lower[pos] += lo;
             if let Some(u) = upper.as_deref_mut() {
                 u[pos] += up;

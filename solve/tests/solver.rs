@@ -3,7 +3,7 @@
 
 use mesh::{Frame, InterfaceElement, InterfaceZone, Model, Region};
 use nalgebra::Vector3;
-use solve::assembly::{ElementLaws, LoadDerivatives, Outputs, States, System, Tangents};
+use solve::assembly::{ElementLaws, LoadDerivatives, Outputs, States, System, Tangents, Tie};
 use solve::laws::elastic::{ElasticInterface, LinearElastic};
 use solve::laws::fczm::{Fczm, DEFAULT_GAMMA};
 use solve::laws::j2::J2;
@@ -374,6 +374,118 @@ fn assembled_tangent_matches_finite_differences() {
         worst < 1e-5 * kmax,
         "max |K − FD| = {worst:e}, max |K| = {kmax:e}"
     );
+}
+
+/// Tied DOFs (u[dof] = ± u[to], a half-turn half's cut face) assemble to
+/// the reduction Tᵀ K T of the untied system with u = T u_free, both
+/// triangles of an unsymmetric (softening Tvergaard) tangent, including a
+/// tet holding a DOF and the one it is tied to (both land on one diagonal
+/// entry), and forces gather to Tᵀ f.
+#[test]
+fn tied_assembly_is_the_reduction_of_the_untied_one() {
+    let m = slab_pullout(4);
+    let tv: AnyInterfaceLaw = AnyInterfaceLaw::Tvergaard(Tvergaard {
+        tensile_strength: 3e6,
+        fracture_energy: 100.0,
+        lambda0: 2e-6,
+        delta_s: 1.0,
+    });
+    let laws = ElementLaws::by_region(&m, elastic(30e9, 0.2), elastic(200e9, 0.3), tv, Some(tv));
+    let active = vec![true; m.interfaces.len()];
+    let n = 3 * m.nodes.len();
+    let t0 = m.tets[0];
+    let (a, b) = (t0[0] as usize, t0[1] as usize);
+    let far = (0..m.nodes.len())
+        .find(|k| !t0.contains(&(*k as u32)))
+        .unwrap();
+    let ties = [
+        Tie {
+            dof: 3 * b,
+            to: 3 * a,
+            sign: -1.0,
+        },
+        Tie {
+            dof: 3 * b + 1,
+            to: 3 * a + 1,
+            sign: 1.0,
+        },
+        Tie {
+            dof: 3 * far + 2,
+            to: 3 * a + 2,
+            sign: -1.0,
+        },
+    ];
+    let mut u = vec![0.0; n];
+    for (i, r) in m.node_region.iter().enumerate() {
+        if *r == Region::Steel {
+            u[3 * i] = -1.5e-6 * (1.0 + 0.1 * (i % 3) as f64);
+            u[3 * i + 2] = 3e-6 + 1e-7 * (i % 5) as f64;
+        }
+    }
+    let assemble = |sys: &System| {
+        let committed = States::initial(&m);
+        let mut trial = committed.clone();
+        let (mut f, mut lo, mut up) = (vec![0.0; n], vec![0.0; sys.nnz()], vec![0.0; sys.nnz()]);
+        sys.evaluate(
+            &laws,
+            &u,
+            &committed,
+            &mut trial,
+            Tangents::all(TangentKind::Consistent),
+            Outputs {
+                f_int: &mut f,
+                lower: Some(&mut lo),
+                upper: Some(&mut up),
+                load: None,
+                kept_bulk: None,
+            },
+        )
+        .unwrap();
+        // Dense, row-major.
+        let nf = sys.dofs().n_free();
+        let mut k = vec![0.0; nf * nf];
+        for j in 0..nf {
+            for p in sys.col_ptr[j]..sys.col_ptr[j + 1] {
+                let i = sys.row_idx[p];
+                k[nf * i + j] = lo[p];
+                k[nf * j + i] = if i == j { lo[p] } else { up[p] };
+            }
+        }
+        (f, k)
+    };
+    let plain = System::new(&m, &[], &[], &active).unwrap();
+    let tied = System::with_ties(&m, &[], &ties, &[], &active).unwrap();
+    let (f, k) = assemble(&plain);
+    let (_, kt) = assemble(&tied);
+    let dofs = tied.dofs();
+    let nf = dofs.n_free();
+    assert_eq!(nf, n - ties.len());
+    let t: Vec<(usize, f64)> = (0..n).map(|d| dofs.signed_index(d).unwrap()).collect();
+    let kmax = k.iter().fold(0.0f64, |x, v| x.max(v.abs()));
+    let mut reduced = vec![0.0; nf * nf];
+    for (i, &(fi, si)) in t.iter().enumerate() {
+        for (j, &(fj, sj)) in t.iter().enumerate() {
+            reduced[nf * fi + fj] += si * sj * k[n * i + j];
+        }
+    }
+    for (e, (r, q)) in reduced.iter().zip(&kt).enumerate() {
+        assert!(
+            (r - q).abs() <= 1e-12 * kmax,
+            "({}, {}): Tᵀ K T {r} vs tied {q}",
+            e / nf,
+            e % nf
+        );
+    }
+    // The tie inside tet 0 puts K_ab + K_ba of a ≠ b on a diagonal.
+    let (fa, _) = t[3 * a];
+    assert!(kt[nf * fa + fa] != k[n * 3 * a + 3 * a]);
+    let mut gathered = vec![0.0; nf];
+    dofs.gather(&f, &mut gathered);
+    let mut expected = vec![0.0; nf];
+    for (d, &(fi, si)) in t.iter().enumerate() {
+        expected[fi] += si * f[d];
+    }
+    assert_eq!(gathered, expected);
 }
 
 /// The load derivatives equal central finite differences: the column
@@ -1006,6 +1118,31 @@ fn half_model_equals_the_whole_it_unfolds_to() {
     let half = quarter.half_of_quarter().unwrap().model;
     assert_eq!(half.symmetry, mesh::Symmetry::Half);
     assert!(half.node_sets.symmetry_x.is_empty() && !half.node_sets.symmetry_y.is_empty());
+    assert_part_equals_the_whole_it_unfolds_to(&half, "half");
+}
+
+/// A half-turn half (the cut face's side x < 0 tied to the half-turn image
+/// of its side x > 0, axis held, force × 2) gives exactly the force of the
+/// whole it unfolds to under the half-turn, and the whole's displacement is
+/// the half-turn image of the half's (issue 14: spiral bars). The slab's
+/// half is also a half-turn half: its cut face's mesh is mirror-symmetric
+/// in x = 0, which on y = 0 is the half-turn. Its plane nodes move (u_x,
+/// u_y ≠ 0), so the ties' signs are exercised.
+#[test]
+fn half_turn_model_equals_the_whole_it_unfolds_to() {
+    let mut half = slab_quarter().half_of_quarter().unwrap().model;
+    half.symmetry = mesh::Symmetry::HalfTurn;
+    let twins = half.half_turn_twins().unwrap();
+    assert!(!twins.pairs.is_empty() && !twins.axis.is_empty());
+    let (dir, _) = solve::problems::pullout::pullout_conditions(&half).unwrap();
+    assert!(!dir.ties.is_empty());
+    assert_part_equals_the_whole_it_unfolds_to(&half, "half-turn");
+}
+
+/// Solves `half` and the whole it unfolds to, the whole with the half's
+/// supports carried to its images, and asserts equal forces past the peak,
+/// image displacements and equal fields written on the whole.
+fn assert_part_equals_the_whole_it_unfolds_to(half: &Model, name: &str) {
     half.check().unwrap();
     let whole = half.unfold();
     let w_model = &whole.model;
@@ -1019,7 +1156,7 @@ fn half_model_equals_the_whole_it_unfolds_to() {
         assert_eq!(*x, [r[0] * s[0], r[1] * s[1], r[2] * s[2]]);
     }
 
-    let (half_dir, half_meas) = solve::problems::pullout::pullout_conditions(&half).unwrap();
+    let (half_dir, half_meas) = solve::problems::pullout::pullout_conditions(half).unwrap();
     let mut whole_dir = Dirichlet::default();
     let mut held = std::collections::BTreeSet::new();
     for (i, &src) in whole.node_source.iter().enumerate() {
@@ -1030,7 +1167,8 @@ fn half_model_equals_the_whole_it_unfolds_to() {
                 .position(|&d| d == 3 * src as usize + c);
             if let Some(k) = k {
                 if held.insert(3 * i + c) {
-                    whole_dir.push(3 * i + c, half_dir.base[k], half_dir.rate[k]);
+                    let sign = whole.node_reflection[i][c];
+                    whole_dir.push(3 * i + c, sign * half_dir.base[k], sign * half_dir.rate[k]);
                 }
             }
         }
@@ -1056,7 +1194,7 @@ fn half_model_equals_the_whole_it_unfolds_to() {
         };
         run(&problem, &loading, &settings, None, &mut Silent).unwrap()
     };
-    let h = run_on(&half, &half_dir, &half_meas);
+    let h = run_on(half, &half_dir, &half_meas);
     let w = run_on(w_model, &whole_dir, &whole_meas);
     let fmax = w.rows.iter().map(|r| r.force).fold(0.0, f64::max);
     let peak = w.rows.iter().position(|r| r.force == fmax).unwrap();
@@ -1067,7 +1205,7 @@ fn half_model_equals_the_whole_it_unfolds_to() {
         assert!((a.force - b.force).abs() <= 1e-7 * fmax, "{a:?} vs {b:?}");
     }
     // The half's fields written on the whole specimen are the whole's.
-    let dir = std::env::temp_dir().join(format!("ribbar-half-vtu-{}", std::process::id()));
+    let dir = std::env::temp_dir().join(format!("ribbar-{name}-vtu-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let write = |name: &str, model: &Model, r: &solve::nonlinear::RunResult, whole| {
         let laws = pullout_laws(model);
@@ -1083,7 +1221,7 @@ fn half_model_equals_the_whole_it_unfolds_to() {
             std::fs::read_to_string(i).unwrap(),
         )
     };
-    let from_half = write("half", &half, &h, Some(&whole));
+    let from_half = write("half", half, &h, Some(&whole));
     let from_whole = write("whole", w_model, &w, None);
     std::fs::remove_dir_all(&dir).ok();
     for (a, b, arrays) in [

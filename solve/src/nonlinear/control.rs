@@ -47,7 +47,7 @@ impl Quantity {
     pub(crate) fn new(weights: Vec<(usize, f64)>, dofs: &DofMap, dirichlet: &Dirichlet) -> Self {
         let free = weights
             .iter()
-            .filter_map(|&(d, w)| dofs.free_index(d).map(|f| (f, w)))
+            .filter_map(|&(d, w)| dofs.signed_index(d).map(|(f, sign)| (f, sign * w)))
             .collect();
         let per_lambda = dirichlet
             .dofs

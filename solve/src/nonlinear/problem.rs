@@ -10,6 +10,9 @@ pub struct Dirichlet {
     pub base: Vec<f64>,
     /// Value per unit λ (dimensionless: λ is a length, m).
     pub rate: Vec<f64>,
+    /// Free DOFs that move as ± another free DOF (a half-turn half model's
+    /// cut face).
+    pub ties: Vec<crate::assembly::Tie>,
 }
 
 impl Dirichlet {

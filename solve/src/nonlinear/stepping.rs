@@ -169,7 +169,13 @@ pub fn run(
     }
     let started = Instant::now();
     let active: Vec<bool> = laws.interfaces.iter().map(|l| l.is_some()).collect();
-    let system = System::new(model, &dirichlet.dofs, &dirichlet.load_rates(), &active)?;
+    let system = System::with_ties(
+        model,
+        &dirichlet.dofs,
+        &dirichlet.ties,
+        &dirichlet.load_rates(),
+        &active,
+    )?;
     let mut driver = Driver::new(*problem, loading, settings, &system, started)?;
     let mut path = match checkpoint {
         Some(cp) => driver.resume(cp)?,

@@ -202,7 +202,7 @@ impl LinearState {
             let layout = NodeBlockLayout::new(
                 &system.col_ptr,
                 &system.row_idx,
-                |d| dofs.free_index(d),
+                |d| dofs.owned_index(d),
                 nodes,
             )?;
             Kept::Multigrid {
@@ -212,7 +212,7 @@ impl LinearState {
         } else {
             let mut dof_node = vec![0usize; dofs.n_free()];
             for d in 0..dofs.n_total() {
-                if let Some(f) = dofs.free_index(d) {
+                if let Some(f) = dofs.owned_index(d) {
                     dof_node[f] = d / 3;
                 }
             }

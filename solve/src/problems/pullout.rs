@@ -12,6 +12,13 @@
 //! * half models (`Symmetry::Half`, y ≥ 0): u_y = 0 on `symmetry_y` (holds y
 //!   translation and rotation about z) and the one point constraint on u_x
 //!   of the whole model's three, which lies in the half; forces × 2;
+//! * half-turn half models (`Symmetry::HalfTurn`, y ≥ 0 of a spiral bar):
+//!   each cut-face node at x < 0 moves as the half-turn image of its twin,
+//!   u = R u_twin with R = diag(−1, −1, 1) (DOF ties); axis nodes get
+//!   u_x = u_y = 0; of the whole model's point constraints, u_y at the two
+//!   line ends on y = 0 (twins of each other: one holds the rotation about
+//!   z); the ties hold the x, y translations; forces × 2. A constrained DOF
+//!   of a twin pair constrains its image with the image value;
 //! * bar loaded end: u_z = λ (the imposed displacement), u_x = u_y = 0 (the
 //!   machine's grip; it also holds the bar's lateral modes once the
 //!   interface has lost its shear stiffness);
@@ -20,7 +27,7 @@
 //!   (the whole z = 0 concrete face as the mesh gives it, m);
 //!   σ_mb = F / (π d l_adh) (paper eq. 14, Pa).
 
-use crate::assembly::ElementLaws;
+use crate::assembly::{ElementLaws, Tie};
 use crate::laws::BulkLaw;
 use crate::nonlinear::{
     run, Checkpoint, Dirichlet, Measurement, Observer, Problem, RunResult, SolveError,
@@ -92,6 +99,14 @@ pub fn pullout_conditions(model: &Model) -> Result<(Dirichlet, Measurement), Sol
     let nearest = |c: usize| line_ends(model, &sets.concrete_bearing_face, c);
     // Nearest the line y = 0: two points at both ends hold u_y (y
     // translation and rotation about z); nearest x = 0: one holds u_x.
+    if model.symmetry == Symmetry::HalfTurn {
+        need("symmetry_y", &sets.symmetry_y)?;
+        let (a, b) = nearest(1);
+        fix(&mut dir, 3 * a as usize + 1, 0.0);
+        fix(&mut dir, 3 * b as usize + 1, 0.0);
+        tie_half_turn(model, &mut dir)?;
+        return Ok((dir, measurement(model)));
+    }
     let (_, c) = nearest(0);
     if model.symmetry == Symmetry::Half {
         // The mirror plane y = 0 holds u_y; c (largest y) is in the half.
@@ -112,6 +127,52 @@ pub fn pullout_conditions(model: &Model) -> Result<(Dirichlet, Measurement), Sol
     fix(&mut dir, 3 * b as usize + 1, 0.0);
     fix(&mut dir, 3 * c as usize, 0.0);
     Ok((dir, measurement(model)))
+}
+
+/// Ties each cut-face node at x < 0 of a half-turn half model to its twin
+/// (u = R u_twin, R = diag(−1, −1, 1)) and holds u_x = u_y = 0 on the axis.
+/// Where a pair has one DOF constrained (a face set, a point constraint),
+/// the other is constrained to the image value instead of tied.
+fn tie_half_turn(model: &Model, dir: &mut Dirichlet) -> Result<(), SolveError> {
+    let twins = model
+        .half_turn_twins()
+        .map_err(|e| SolveError::Model(format!("half-turn cut plane: {e}")))?;
+    let mut at: Vec<Option<usize>> = vec![None; 3 * model.nodes.len()];
+    for (i, &d) in dir.dofs.iter().enumerate() {
+        at[d] = Some(i);
+    }
+    for &n in &twins.axis {
+        for c in 0..2 {
+            let d = 3 * n as usize + c;
+            if at[d].is_none() {
+                at[d] = Some(dir.dofs.len());
+                dir.push(d, 0.0, 0.0);
+            }
+        }
+    }
+    for &(image, source) in &twins.pairs {
+        for c in 0..3 {
+            let sign = if c < 2 { -1.0 } else { 1.0 };
+            let (di, ds) = (3 * image as usize + c, 3 * source as usize + c);
+            match (at[di], at[ds]) {
+                (None, None) => dir.ties.push(Tie {
+                    dof: di,
+                    to: ds,
+                    sign,
+                }),
+                (Some(_), Some(_)) => {}
+                (None, Some(k)) => {
+                    at[di] = Some(dir.dofs.len());
+                    dir.push(di, sign * dir.base[k], sign * dir.rate[k]);
+                }
+                (Some(k), None) => {
+                    at[ds] = Some(dir.dofs.len());
+                    dir.push(ds, sign * dir.base[k], sign * dir.rate[k]);
+                }
+            }
+        }
+    }
+    Ok(())
 }
 
 /// The two bearing-face nodes at the ends of the line of face nodes
