@@ -1106,7 +1106,7 @@ fn vtu_array(text: &str, name: &str) -> Vec<f64> {
 }
 
 /// A half model (the plane y = 0 held normal, force × 2) gives exactly the
-/// force of the whole it unfolds to, past the peak too, and a displacement
+/// force and FED of the whole it unfolds to, past the peak too, and a displacement
 /// field whose mirror image is the whole's (issue 14: half models). The
 /// slab's quarter mirrored in x = 0 is the half; the half mirrored in y = 0
 /// the whole, solved with the half's supports and their mirror images (the
@@ -1122,8 +1122,8 @@ fn half_model_equals_the_whole_it_unfolds_to() {
 }
 
 /// A half-turn half (the cut face's side x < 0 tied to the half-turn image
-/// of its side x > 0, axis held, force × 2) gives exactly the force of the
-/// whole it unfolds to under the half-turn, and the whole's displacement is
+/// of its side x > 0, axis held, force × 2) gives exactly the force and FED
+/// of the whole it unfolds to under the half-turn, and the whole's displacement is
 /// the half-turn image of the half's (issue 14: spiral bars). The slab's
 /// half is also a half-turn half: its cut face's mesh is mirror-symmetric
 /// in x = 0, which on y = 0 is the half-turn. Its plane nodes move (u_x,
@@ -1140,7 +1140,7 @@ fn half_turn_model_equals_the_whole_it_unfolds_to() {
 }
 
 /// Solves `half` and the whole it unfolds to, the whole with the half's
-/// supports carried to its images, and asserts equal forces past the peak,
+/// supports carried to its images, and asserts equal forces and FED past the peak,
 /// image displacements and equal fields written on the whole.
 fn assert_part_equals_the_whole_it_unfolds_to(half: &Model, name: &str) {
     half.check().unwrap();
@@ -1200,9 +1200,12 @@ fn assert_part_equals_the_whole_it_unfolds_to(half: &Model, name: &str) {
     let peak = w.rows.iter().position(|r| r.force == fmax).unwrap();
     assert!(peak + 3 < w.rows.len(), "the run should pass its peak");
     assert_eq!(h.rows.len(), w.rows.len());
+    let fed_max = w.rows.iter().map(|r| r.fed.abs()).fold(0.0, f64::max);
     for (a, b) in h.rows.iter().zip(&w.rows) {
         assert_eq!(a.u_imposed, b.u_imposed);
         assert!((a.force - b.force).abs() <= 1e-7 * fmax, "{a:?} vs {b:?}");
+        // FED weights each node of the part by its images in the whole.
+        assert!((a.fed - b.fed).abs() <= 1e-7 * fed_max, "{a:?} vs {b:?}");
     }
     // The half's fields written on the whole specimen are the whole's.
     let dir = std::env::temp_dir().join(format!("ribbar-{name}-vtu-{}", std::process::id()));

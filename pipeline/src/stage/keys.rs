@@ -61,6 +61,15 @@ impl Keys {
             let (reads, ignores) = stage.reads();
             let mut inputs = select(&resolved, reads, ignores);
             inputs.insert("format".into(), json!(stage.format()));
+            // A part of a symmetric specimen weights its FED nodes by their
+            // images in the whole since this input: whole models' results
+            // did not change, so their keys (and stored solves) stay.
+            let symmetry = resolved
+                .pointer("/specimen/symmetry")
+                .and_then(Value::as_str);
+            if matches!(stage, Stage::Solve) && symmetry != Some("full") {
+                inputs.insert("fed".into(), json!("whole-specimen node weights"));
+            }
             if stage.uses_gmsh() {
                 inputs.insert("gmsh".into(), json!(gmsh_version));
             }

@@ -46,6 +46,11 @@ pub struct Measurement {
     /// Relative displacement = mean u over `plus` − mean u over `minus`, m.
     pub plus_dofs: Vec<usize>,
     pub minus_dofs: Vec<usize>,
+    /// Weights of those means, one per DOF (empty: equal weights). A part
+    /// of a symmetric specimen weights each node by the number of its
+    /// images in the whole, so the means are the whole specimen's.
+    pub plus_weights: Vec<f64>,
+    pub minus_weights: Vec<f64>,
     /// Stress = force · this factor (1/m²), e.g. 1/(π d l_adh) (applied
     /// after `force_factor`).
     pub stress_per_force: f64,
@@ -60,6 +65,8 @@ impl Default for Measurement {
             force_dofs: Vec::new(),
             plus_dofs: Vec::new(),
             minus_dofs: Vec::new(),
+            plus_weights: Vec::new(),
+            minus_weights: Vec::new(),
             stress_per_force: 0.0,
             force_factor: 1.0,
         }
@@ -71,11 +78,16 @@ impl Measurement {
     /// `plus` minus mean over `minus`).
     pub fn relative_weights(&self) -> Vec<(usize, f64)> {
         let mut w = Vec::new();
-        for (ds, sign) in [(&self.plus_dofs, 1.0), (&self.minus_dofs, -1.0)] {
-            if !ds.is_empty() {
-                let each = sign / ds.len() as f64;
-                w.extend(ds.iter().map(|&d| (d, each)));
-            }
+        for (ds, ws, sign) in [
+            (&self.plus_dofs, &self.plus_weights, 1.0),
+            (&self.minus_dofs, &self.minus_weights, -1.0),
+        ] {
+            let total = weight_sum(ds, ws);
+            w.extend(
+                ds.iter()
+                    .enumerate()
+                    .map(|(i, &d)| (d, sign * ws.get(i).copied().unwrap_or(1.0) / total)),
+            );
         }
         w
     }
@@ -83,14 +95,26 @@ impl Measurement {
     /// (force N, relative displacement m, stress Pa) of a state.
     pub(crate) fn eval(&self, u: &[f64], f_int: &[f64]) -> (f64, f64, f64) {
         let force: f64 = self.force_factor * self.force_dofs.iter().map(|&d| f_int[d]).sum::<f64>();
-        let mean = |ds: &[usize]| {
+        let mean = |ds: &[usize], ws: &[f64]| {
             if ds.is_empty() {
                 0.0
-            } else {
+            } else if ws.is_empty() {
                 ds.iter().map(|&d| u[d]).sum::<f64>() / ds.len() as f64
+            } else {
+                ds.iter().zip(ws).map(|(&d, w)| w * u[d]).sum::<f64>() / weight_sum(ds, ws)
             }
         };
-        let rel = mean(&self.plus_dofs) - mean(&self.minus_dofs);
+        let rel =
+            mean(&self.plus_dofs, &self.plus_weights) - mean(&self.minus_dofs, &self.minus_weights);
         (force, rel, force * self.stress_per_force)
+    }
+}
+
+/// Σ of the weights of `ds` (their count when `ws` is empty).
+fn weight_sum(ds: &[usize], ws: &[f64]) -> f64 {
+    if ws.is_empty() {
+        ds.len() as f64
+    } else {
+        ws.iter().sum()
     }
 }

@@ -24,7 +24,10 @@
 //!   interface has lost its shear stiffness);
 //! * F = Σ of the internal forces f_z over the loaded-end nodes (the pull,
 //!   N); FED = mean u_z of `bar_free_end` − mean u_z of `concrete_free_face`
-//!   (the whole z = 0 concrete face as the mesh gives it, m);
+//!   (the whole z = 0 concrete face as the mesh gives it, m); in a part of
+//!   a symmetric specimen each node weighs as many times as it appears in
+//!   the whole (2 in a half, 4 in a quarter, halved per plane it lies on),
+//!   so FED is the whole specimen's;
 //!   σ_mb = F / (π d l_adh) (paper eq. 14, Pa).
 
 use crate::assembly::{ElementLaws, Tie};
@@ -277,22 +280,28 @@ pub fn bar_yield_force(model: &Model, laws: &ElementLaws) -> Option<f64> {
 /// Force on the loaded end (times the symmetry factor), FED and σ_mb.
 fn measurement(model: &Model) -> Measurement {
     let sets = &model.node_sets;
+    let uz = |set: &[u32]| set.iter().map(|&n| 3 * n as usize + 2).collect();
+    // Whole-specimen means: each node counts as often as it appears in the
+    // whole (force_factor, halved per plane set it lies on: its image in
+    // that plane is itself, or its twin, which the part holds too).
+    let mut planes = vec![0i32; model.nodes.len()];
+    for &n in sets.symmetry_x.iter().chain(&sets.symmetry_y) {
+        planes[n as usize] += 1;
+    }
+    let weights = |set: &[u32]| -> Vec<f64> {
+        if model.symmetry == Symmetry::Full {
+            return Vec::new();
+        }
+        set.iter()
+            .map(|&n| model.symmetry.force_factor() / 2f64.powi(planes[n as usize]))
+            .collect()
+    };
     Measurement {
-        force_dofs: sets
-            .bar_loaded_end
-            .iter()
-            .map(|&n| 3 * n as usize + 2)
-            .collect(),
-        plus_dofs: sets
-            .bar_free_end
-            .iter()
-            .map(|&n| 3 * n as usize + 2)
-            .collect(),
-        minus_dofs: sets
-            .concrete_free_face
-            .iter()
-            .map(|&n| 3 * n as usize + 2)
-            .collect(),
+        force_dofs: uz(&sets.bar_loaded_end),
+        plus_dofs: uz(&sets.bar_free_end),
+        minus_dofs: uz(&sets.concrete_free_face),
+        plus_weights: weights(&sets.bar_free_end),
+        minus_weights: weights(&sets.concrete_free_face),
         stress_per_force: 1.0 / (std::f64::consts::PI * model.bar_diameter * model.adhesive_length),
         force_factor: model.symmetry.force_factor(),
     }
