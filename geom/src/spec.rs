@@ -38,8 +38,9 @@ pub enum SideB {
 #[serde(rename_all = "lowercase")]
 pub enum RawSymmetry {
     /// The smallest exact part: the quarter of a smooth bar's specimen, the
-    /// half of a herringbone bar's (side B mirrored, no phase), the whole
-    /// of a spiral one's.
+    /// half of a herringbone bar's (side B mirrored, no phase), the
+    /// half-turn half of a spiral one's (side B rotated, no phase), the
+    /// whole of a bar with a phase between its sides.
     #[default]
     Auto,
     Full,
@@ -446,10 +447,7 @@ fn resolve_symmetry(raw: RawSymmetry, bar: &Bar) -> Result<Symmetry, SpecError> 
             key: "specimen.symmetry".into(),
             problem: format!("half needs a symmetric half: {why}; use full or auto"),
         }),
-        (RawSymmetry::Auto, BarKind::Ribbed) => Ok(match half {
-            Ok(Symmetry::Half) => Symmetry::Half,
-            _ => Symmetry::Full,
-        }),
+        (RawSymmetry::Auto, BarKind::Ribbed) => Ok(half.unwrap_or(Symmetry::Full)),
         (RawSymmetry::Quarter, BarKind::Ribbed) => Err(SpecError::Inconsistent {
             key: "specimen.symmetry".into(),
             problem: "quarter needs a smooth bar: a ribbed bar has at most one mirror \
@@ -785,9 +783,12 @@ mod tests {
         assert!(serde_yaml::from_str::<RawSpecimen>("{cube: 1}").is_err());
     }
 
-    /// `specimen.symmetry: auto` models a quarter of a smooth bar's specimen and the whole of a ribbed one's; `full` is honoured for a smooth bar (issue 7: symmetry on by default for smooth bars).
+    /// `specimen.symmetry: auto` models a quarter of a smooth bar's
+    /// specimen and the half-turn half of a (default: spiral, no phase)
+    /// ribbed one's; `full` is honoured for both (issue 7: symmetry on by
+    /// default for smooth bars; issue 14: for ribbed bars).
     #[test]
-    fn symmetry_auto_is_quarter_for_smooth_full_for_ribbed() {
+    fn symmetry_auto_is_quarter_for_smooth_half_for_ribbed() {
         let smooth = "{kind: smooth, diameter: 8 mm}";
         let ribbed = "{kind: ribbed, diameter: 8 mm}";
         assert_eq!(
@@ -796,7 +797,7 @@ mod tests {
         );
         assert_eq!(
             try_resolve(ribbed, "{}").unwrap().1.symmetry,
-            Symmetry::Full
+            Symmetry::HalfTurn
         );
         let full = try_resolve(smooth, "{symmetry: full}").unwrap().1;
         assert_eq!(full.symmetry, Symmetry::Full);
@@ -812,11 +813,11 @@ mod tests {
         assert_eq!(json["symmetry"], "quarter");
     }
 
-    /// `auto` models the half y ≥ 0 of a herringbone bar without phase (its
-    /// one mirror plane is that of the longitudinal ribs) and the whole of a
-    /// spiral one or of a herringbone one with phase; `half` on a spiral bar
-    /// without phase is its half-turn half; `half` with a phase is refused
-    /// naming the key and the reason (issue 14).
+    /// `auto` and `half` model the half y ≥ 0 of a herringbone bar without
+    /// phase (its one mirror plane is that of the longitudinal ribs) and
+    /// the half-turn half of a spiral one; `auto` models a bar with a phase
+    /// whole, and `half` there is refused naming the key and the reason
+    /// (issue 14).
     #[test]
     fn symmetry_half_only_for_a_symmetric_half() {
         let hb = "{kind: ribbed, diameter: 8 mm, ribs: {side_b: mirrored}}";
@@ -829,7 +830,8 @@ mod tests {
         assert_eq!(sym(hb, "{symmetry: half}"), Symmetry::Half);
         assert_eq!(sym(hb, "{symmetry: full}"), Symmetry::Full);
         assert_eq!(sym(hb_phase, "{}"), Symmetry::Full);
-        assert_eq!(sym(spiral, "{}"), Symmetry::Full);
+        assert_eq!(sym(spiral_phase, "{}"), Symmetry::Full);
+        assert_eq!(sym(spiral, "{}"), Symmetry::HalfTurn);
         assert_eq!(sym(spiral, "{symmetry: half}"), Symmetry::HalfTurn);
         assert_eq!(sym(smooth, "{symmetry: half}"), Symmetry::Half);
         assert_eq!(Symmetry::Half.fraction(), 0.5);

@@ -84,5 +84,5 @@ fn quarter_ribbed_bar_is_rejected() {
     let msg = resolve(&bar, &sp).unwrap_err().to_string();
     assert!(msg.contains("specimen.symmetry"), "{msg}");
     let sp: RawSpecimen = serde_yaml::from_str("{symmetry: auto}").unwrap();
-    assert_eq!(resolve(&bar, &sp).unwrap().1.symmetry, Symmetry::Full);
+    assert_eq!(resolve(&bar, &sp).unwrap().1.symmetry, Symmetry::HalfTurn);
 }

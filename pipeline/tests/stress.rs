@@ -115,7 +115,17 @@ fn extreme_parameters_never_panic_or_mislead() {
 fn threshold_two_cycles_are_settled_by_an_explicit_retry() {
     let work = std::env::temp_dir().join(format!("ribbar-cycle-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&work);
-    let (out, solve) = run_tiny_ribbed(&work, &["--set", "solver.stagnation_acceptance=1"]);
+    // The whole specimen's mesh has the two-cycle (its half-turn half, the
+    // default, runs through without one).
+    let (out, solve) = run_tiny_ribbed(
+        &work,
+        &[
+            "--set",
+            "solver.stagnation_acceptance=1",
+            "--set",
+            "specimen.symmetry=full",
+        ],
+    );
     assert!(
         out.status.success(),
         "{}",
@@ -144,9 +154,12 @@ fn impl_ex_concrete_runs_through_the_threshold_two_cycles() {
     use pipeline::post::{curve_distance, read_curve_csv, CurveAxis};
     let work = std::env::temp_dir().join(format!("ribbar-implex-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&work);
+    // The whole specimen, whose implicit solve has the two-cycles.
     let run = |label: &str, extra: &[&str]| {
         let dir = work.join(label);
-        let (out, solve) = run_tiny_ribbed(&dir, extra);
+        let mut args = vec!["--set", "specimen.symmetry=full"];
+        args.extend_from_slice(extra);
+        let (out, solve) = run_tiny_ribbed(&dir, &args);
         let curve = read_curve_csv(&dir.join("tiny-ribbed/curve.csv")).unwrap();
         (out, solve, curve)
     };
@@ -200,9 +213,12 @@ fn impl_ex_concrete_runs_through_the_threshold_two_cycles() {
 fn a_cube_that_splits_at_its_peak_ends_at_a_brittle_failure() {
     let work = std::env::temp_dir().join(format!("ribbar-split-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&work);
+    // The whole specimen, as the case was found and diagnosed.
     let (out, solve) = run_tiny_ribbed(
         &work,
         &[
+            "--set",
+            "specimen.symmetry=full",
             "--set",
             "materials.interface.lambda0=1e-6m",
             "--set",
