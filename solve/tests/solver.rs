@@ -3,7 +3,9 @@
 
 use mesh::{Frame, InterfaceElement, InterfaceZone, Model, Region};
 use nalgebra::Vector3;
-use solve::assembly::{ElementLaws, LoadDerivatives, Outputs, States, System, Tangents, Tie};
+use solve::assembly::{
+    ElementLaws, KeptBulkMatrix, LoadDerivatives, Outputs, States, System, Tangents, Tie,
+};
 use solve::laws::elastic::{ElasticInterface, LinearElastic};
 use solve::laws::fczm::{Fczm, DEFAULT_GAMMA};
 use solve::laws::j2::J2;
@@ -295,11 +297,8 @@ fn patch_test_uniform_strain_on_perturbed_mesh() {
     }
 }
 
-/// The assembled tangent equals the central finite difference of the
-/// assembled internal force with a nonlinear (softening) interface law
-/// (STYLE §4; consistency of the Newton matrix, SPEC §6).
-#[test]
-fn assembled_tangent_matches_finite_differences() {
+/// The slab with elastic bulk and a softening (Tvergaard) interface.
+fn softening_slab() -> (Model, ElementLaws) {
     let m = slab_pullout(4);
     let tv: AnyInterfaceLaw = AnyInterfaceLaw::Tvergaard(Tvergaard {
         tensile_strength: 3e6,
@@ -308,6 +307,15 @@ fn assembled_tangent_matches_finite_differences() {
         delta_s: 1.0,
     });
     let laws = ElementLaws::by_region(&m, elastic(30e9, 0.2), elastic(200e9, 0.3), tv, Some(tv));
+    (m, laws)
+}
+
+/// The assembled tangent equals the central finite difference of the
+/// assembled internal force with a nonlinear (softening) interface law
+/// (STYLE §4; consistency of the Newton matrix, SPEC §6).
+#[test]
+fn assembled_tangent_matches_finite_differences() {
+    let (m, laws) = softening_slab();
     let sys = System::new(&m, &[], &[], &vec![true; m.interfaces.len()]).unwrap();
     let n = 3 * m.nodes.len();
     // A displacement with the steel side sliding and opening past λ_0.
@@ -376,6 +384,39 @@ fn assembled_tangent_matches_finite_differences() {
     );
 }
 
+/// Internal forces, both triangles of the consistent tangent and the trial
+/// states of `sys` at `u` from `start`.
+fn consistent_tangent(
+    sys: &System,
+    laws: &ElementLaws,
+    u: &[f64],
+    start: &States,
+    kept: Option<&mut KeptBulkMatrix>,
+) -> (Vec<f64>, Vec<f64>, Vec<f64>, States) {
+    let mut trial = start.clone();
+    let (mut f, mut lower, mut upper) = (
+        vec![0.0; u.len()],
+        vec![0.0; sys.nnz()],
+        vec![0.0; sys.nnz()],
+    );
+    sys.evaluate(
+        laws,
+        u,
+        start,
+        &mut trial,
+        Tangents::all(TangentKind::Consistent),
+        Outputs {
+            f_int: &mut f,
+            lower: Some(&mut lower),
+            upper: Some(&mut upper),
+            load: None,
+            kept_bulk: kept,
+        },
+    )
+    .unwrap();
+    (f, lower, upper, trial)
+}
+
 /// Tied DOFs (u[dof] = ± u[to], a half-turn half's cut face) assemble to
 /// the reduction Tᵀ K T of the untied system with u = T u_free, both
 /// triangles of an unsymmetric (softening Tvergaard) tangent, including a
@@ -383,14 +424,7 @@ fn assembled_tangent_matches_finite_differences() {
 /// entry), and forces gather to Tᵀ f.
 #[test]
 fn tied_assembly_is_the_reduction_of_the_untied_one() {
-    let m = slab_pullout(4);
-    let tv: AnyInterfaceLaw = AnyInterfaceLaw::Tvergaard(Tvergaard {
-        tensile_strength: 3e6,
-        fracture_energy: 100.0,
-        lambda0: 2e-6,
-        delta_s: 1.0,
-    });
-    let laws = ElementLaws::by_region(&m, elastic(30e9, 0.2), elastic(200e9, 0.3), tv, Some(tv));
+    let (m, laws) = softening_slab();
     let active = vec![true; m.interfaces.len()];
     let n = 3 * m.nodes.len();
     let t0 = m.tets[0];
@@ -423,24 +457,7 @@ fn tied_assembly_is_the_reduction_of_the_untied_one() {
         }
     }
     let assemble = |sys: &System| {
-        let committed = States::initial(&m);
-        let mut trial = committed.clone();
-        let (mut f, mut lo, mut up) = (vec![0.0; n], vec![0.0; sys.nnz()], vec![0.0; sys.nnz()]);
-        sys.evaluate(
-            &laws,
-            &u,
-            &committed,
-            &mut trial,
-            Tangents::all(TangentKind::Consistent),
-            Outputs {
-                f_int: &mut f,
-                lower: Some(&mut lo),
-                upper: Some(&mut up),
-                load: None,
-                kept_bulk: None,
-            },
-        )
-        .unwrap();
+        let (f, lo, up, _) = consistent_tangent(sys, &laws, &u, &States::initial(&m), None);
         // Dense, row-major.
         let nf = sys.dofs().n_free();
         let mut k = vec![0.0; nf * nf];
@@ -1589,7 +1606,6 @@ fn debonded_frictionless_bar_ends_unloaded() {
 /// element matrix, to rounding.
 #[test]
 fn kept_element_matrices_assemble_the_full_tangent() {
-    use solve::assembly::KeptBulkMatrix;
     use solve::laws::mazars::{CompressionSoftening, MazarsMaterial, TensionSoftening};
     let m = slab_pullout(6);
     let concrete: AnyBulkLaw = AnyBulkLaw::Mazars(
@@ -1638,26 +1654,8 @@ fn kept_element_matrices_assemble_the_full_tangent() {
         }
         u
     };
-    let nnz = sys.nnz();
     let assemble = |u: &[f64], start: &States, kept: Option<&mut KeptBulkMatrix>| {
-        let mut trial = start.clone();
-        let (mut f, mut lower, mut upper) = (vec![0.0; n], vec![0.0; nnz], vec![0.0; nnz]);
-        sys.evaluate(
-            &laws,
-            u,
-            start,
-            &mut trial,
-            Tangents::all(TangentKind::Consistent),
-            Outputs {
-                f_int: &mut f,
-                lower: Some(&mut lower),
-                upper: Some(&mut upper),
-                load: None,
-                kept_bulk: kept,
-            },
-        )
-        .unwrap();
-        (f, lower, upper, trial)
+        consistent_tangent(&sys, &laws, u, start, kept)
     };
     let mut kept = KeptBulkMatrix::default();
     let close = |a: &[f64], b: &[f64], what: &str| {
