@@ -71,19 +71,9 @@ fn grid_on_diameter(d: f64) -> (usize, usize) {
                         let core = std::f64::consts::PI
                             * (d * 5e-4f64).powi(2)
                             * (sp.bar_z_max() - sp.bar_z_min());
-                        let rel = |a: f64, b: f64| (a - b).abs() / b.abs();
-                        assert!(
-                            rel(t.bar_volume_m3 - core, m.rib_volume_m3) < 0.01,
-                            "{d} {angle} {h} {s}: rib volume"
-                        );
-                        assert!(
-                            rel(t.slab_areas_m2[0], m.interface_area_adhesive_m2) < 0.01,
-                            "{d} {angle} {h} {s}"
-                        );
-                        assert!(
-                            rel(t.slab_areas_m2[1], m.interface_area_free_m2) < 0.01,
-                            "{d} {angle} {h} {s}"
-                        );
+                        if let Err(e) = geom::metrics::check_offline(&m, &t, core, 0.01) {
+                            panic!("{d} {angle} {h} {s}: {e}");
+                        }
                         assert!(m.f_r > 0.0 && m.rib_volume_m3 > 0.0);
                         valid += 1;
                     }
