@@ -5,7 +5,10 @@
 //!   finest level, 6×6 blocks per aggregate below, both triangles stored so
 //!   the products parallelise over rows.
 //! * Aggregation by node (greedy, three passes) on the block graph, with a
-//!   strength threshold on the block Frobenius norms.
+//!   strength threshold on the block Frobenius norms. A model tied across
+//!   a cut gives each node a chart (its side of the cut): no aggregate, on
+//!   any level, holds nodes of two sides, since the rigid-body modes are
+//!   rigid within one side only.
 //! * Tentative prolongator: per aggregate the QR factorisation of the
 //!   near-null space (the 6 rigid-body modes from the node coordinates on
 //!   the finest level, the R factors below); Q is the prolongator block, R
@@ -263,6 +266,8 @@ impl Default for AmgParams {
 pub enum AmgError {
     #[error("near-null space has {got} values, expected {expected} (6 per DOF)")]
     NullSpace { got: usize, expected: usize },
+    #[error("{got} node charts for {expected} nodes")]
+    Charts { got: usize, expected: usize },
     #[error("matrix is not square with 3×3 blocks")]
     Shape,
     #[error("diagonal block of row {row} on level {level} is singular")]
@@ -425,9 +430,19 @@ fn lambda_max(a: &Bsr, dinv: &[f64]) -> f64 {
 /// Greedy aggregation of the block rows of `a`: `agg[i]` is the aggregate
 /// of node i or `u32::MAX` for an isolated node (no strong neighbour:
 /// fully constrained), which the prolongator leaves out.
-fn aggregate(a: &Bsr, theta: f64) -> (Vec<u32>, usize) {
+///
+/// `charts` (one per node, or empty: all 0) keeps apart nodes of opposite
+/// non-zero charts: no aggregate holds both a +1 and a −1 node. A model
+/// tied across a cut (a half-turn half) has rigid-body modes that are
+/// rigid only within one side of the cut; an aggregate reaching across
+/// would take a mode that jumps there into the coarse space. Returns also
+/// each aggregate's chart (its members' non-zero chart, or 0), the charts
+/// of the next level.
+fn aggregate(a: &Bsr, theta: f64, charts: &[i8]) -> (Vec<u32>, usize, Vec<i8>) {
     let n = a.rows;
     let bsz = a.br * a.bc;
+    let chart = |i: usize| charts.get(i).copied().unwrap_or(0);
+    let fits = |c: i8, into: i8| c * into >= 0;
     let fro = |k: usize| {
         a.values[k * bsz..(k + 1) * bsz]
             .iter()
@@ -455,18 +470,29 @@ fn aggregate(a: &Bsr, theta: f64) -> (Vec<u32>, usize) {
         .collect();
     const NONE: u32 = u32::MAX;
     let mut agg = vec![NONE; n];
-    let mut count = 0u32;
-    // Pass 1: a node whose strong neighbours are all free seeds an aggregate.
+    let mut agg_chart: Vec<i8> = Vec::new();
+    // Pass 1: a node whose strong neighbours are all free (and of one
+    // chart with it) seeds an aggregate.
     for i in 0..n {
         if agg[i] != NONE || strong[i].is_empty() {
             continue;
         }
-        if strong[i].iter().all(|&j| agg[j as usize] == NONE) {
-            agg[i] = count;
-            for &j in &strong[i] {
-                agg[j as usize] = count;
+        let mut c = chart(i);
+        let free = strong[i].iter().all(|&j| {
+            let cj = chart(j as usize);
+            let ok = agg[j as usize] == NONE && fits(cj, c);
+            if ok && c == 0 {
+                c = cj;
             }
-            count += 1;
+            ok
+        });
+        if free {
+            let id = agg_chart.len() as u32;
+            agg[i] = id;
+            for &j in &strong[i] {
+                agg[j as usize] = id;
+            }
+            agg_chart.push(c);
         }
     }
     // Pass 2: join the neighbouring aggregate of strongest connection.
@@ -478,7 +504,7 @@ fn aggregate(a: &Bsr, theta: f64) -> (Vec<u32>, usize) {
         let mut best = (0.0, NONE);
         for k in a.row_ptr[i]..a.row_ptr[i + 1] {
             let j = a.col_idx[k] as usize;
-            if j != i && pass1[j] != NONE {
+            if j != i && pass1[j] != NONE && fits(chart(i), agg_chart[pass1[j] as usize]) {
                 let f = fro(k);
                 if f > best.0 {
                     best = (f, pass1[j]);
@@ -486,21 +512,31 @@ fn aggregate(a: &Bsr, theta: f64) -> (Vec<u32>, usize) {
             }
         }
         agg[i] = best.1;
+        if best.1 != NONE && agg_chart[best.1 as usize] == 0 {
+            agg_chart[best.1 as usize] = chart(i);
+        }
     }
     // Pass 3: what is left forms aggregates with its free neighbours.
     for i in 0..n {
         if agg[i] != NONE || strong[i].is_empty() {
             continue;
         }
-        agg[i] = count;
+        let id = agg_chart.len() as u32;
+        let mut c = chart(i);
+        agg[i] = id;
         for &j in &strong[i] {
-            if agg[j as usize] == NONE {
-                agg[j as usize] = count;
+            let cj = chart(j as usize);
+            if agg[j as usize] == NONE && fits(cj, c) {
+                agg[j as usize] = id;
+                if c == 0 {
+                    c = cj;
+                }
             }
         }
-        count += 1;
+        agg_chart.push(c);
     }
-    (agg, count as usize)
+    let count = agg_chart.len();
+    (agg, count, agg_chart)
 }
 
 /// Tentative prolongator (br = block size of `a`, bc = 6) and the coarse
@@ -691,6 +727,25 @@ impl Amg {
     /// blocks, both triangles) with the near-null space `null` (6 values per
     /// DOF, row-major: DOF i's row is `null[6i..6i+6]`).
     pub fn new(a: Bsr, null: &[f64], params: AmgParams) -> Result<Self, AmgError> {
+        Self::with_charts(a, null, &[], params)
+    }
+
+    /// As [`Amg::new`] for a matrix tied across a cut: `charts` gives each
+    /// node's side of the cut (+1 or −1; 0 for either, and for all nodes
+    /// when empty), and no aggregate on any level reaches across (the
+    /// near-null space `null` is rigid within one side only).
+    pub fn with_charts(
+        a: Bsr,
+        null: &[f64],
+        charts: &[i8],
+        params: AmgParams,
+    ) -> Result<Self, AmgError> {
+        if !charts.is_empty() && charts.len() != a.rows {
+            return Err(AmgError::Charts {
+                got: charts.len(),
+                expected: a.rows,
+            });
+        }
         if a.br != 3 || a.bc != 3 || a.rows != a.cols {
             return Err(AmgError::Shape);
         }
@@ -704,6 +759,7 @@ impl Amg {
         let mut levels = Vec::new();
         let mut a = a;
         let mut null = null.to_vec();
+        let mut charts = charts.to_vec();
         loop {
             let level = levels.len();
             let n = a.rows * a.br;
@@ -712,7 +768,7 @@ impl Amg {
             }
             let dinv = block_diag_inverse(&a, level)?;
             let lam = lambda_max(&a, &dinv);
-            let (agg, n_agg) = aggregate(&a, params.strength);
+            let (agg, n_agg, coarse_charts) = aggregate(&a, params.strength, &charts);
             if n_agg == 0 || 6 * n_agg >= n {
                 break;
             }
@@ -749,6 +805,7 @@ impl Amg {
             });
             a = ac;
             null = coarse_null;
+            charts = coarse_charts;
         }
         let (cp, ri, v, dn) = to_lower_csc(&a);
         let mut coarse = Cholesky::new(&cp, &ri, Ordering::Metis, &dn)?;
@@ -1060,5 +1117,114 @@ mod tests {
             }
         }
         assert!(!invert_small(&mut [0.0; 9], 3));
+    }
+
+    /// A grid of nx × ny nodes with 3×3 blocks: −w·I between grid
+    /// neighbours, the diagonal their sum plus a small shift (SPD), and
+    /// each node's chart the sign of its column's offset from the middle.
+    fn grid(nx: usize, ny: usize) -> (Bsr, Vec<i8>, Vec<f64>) {
+        let id = |i: usize, j: usize| i * ny + j;
+        let mut row_ptr = vec![0];
+        let mut col_idx = Vec::new();
+        let mut values = Vec::new();
+        let mut nodes = Vec::new();
+        for i in 0..nx {
+            for j in 0..ny {
+                let mut row: Vec<(usize, f64)> = Vec::new();
+                let mut sum = 1e-3;
+                for (di, dj) in [(-1i64, 0i64), (1, 0), (0, -1), (0, 1)] {
+                    let (p, q) = (i as i64 + di, j as i64 + dj);
+                    if p >= 0 && q >= 0 && (p as usize) < nx && (q as usize) < ny {
+                        let w = 1.0 + 0.1 * ((i + j) % 3) as f64;
+                        row.push((id(p as usize, q as usize), -w));
+                        sum += w;
+                    }
+                }
+                row.push((id(i, j), sum));
+                row.sort_by_key(|e| e.0);
+                for (c, v) in row {
+                    col_idx.push(c as u32);
+                    for r in 0..3 {
+                        for k in 0..3 {
+                            values.push(if r == k { v } else { 0.0 });
+                        }
+                    }
+                }
+                row_ptr.push(col_idx.len());
+                nodes.push([i as f64 - (nx / 2) as f64, j as f64, 0.0]);
+            }
+        }
+        let charts = nodes.iter().map(|x| (x[0] as i64).signum() as i8).collect();
+        let a = Bsr {
+            rows: nx * ny,
+            cols: nx * ny,
+            br: 3,
+            bc: 3,
+            row_ptr,
+            col_idx,
+            values,
+        };
+        let null = crate::linalg::multigrid::rigid_body_modes(&nodes, |_| true);
+        (a, charts, null)
+    }
+
+    /// No aggregate holds nodes of two opposite charts, every node of a
+    /// non-zero chart lands in an aggregate of its chart, and without charts
+    /// the same matrix aggregates across the middle (so the rule is what
+    /// keeps the sides apart).
+    #[test]
+    fn aggregates_stay_on_one_side_of_a_cut() {
+        let (a, charts, null) = grid(15, 9);
+        let (agg, n_agg, coarse) = aggregate(&a, 0.0, &charts);
+        assert_eq!(coarse.len(), n_agg);
+        let mut sides = vec![[false; 2]; n_agg];
+        for (i, &g) in agg.iter().enumerate() {
+            assert_ne!(g, u32::MAX, "node {i} left out");
+            match charts[i] {
+                1 => sides[g as usize][0] = true,
+                -1 => sides[g as usize][1] = true,
+                _ => {}
+            }
+            if charts[i] != 0 {
+                assert_eq!(coarse[g as usize], charts[i], "node {i}");
+            }
+        }
+        assert!(sides.iter().all(|s| !(s[0] && s[1])));
+        let (free_agg, free_n, free_coarse) = aggregate(&a, 0.0, &[]);
+        assert!(free_coarse.iter().all(|&c| c == 0));
+        let mut mixed = vec![[false; 2]; free_n];
+        for (i, &g) in free_agg.iter().enumerate() {
+            match charts[i] {
+                1 => mixed[g as usize][0] = true,
+                -1 => mixed[g as usize][1] = true,
+                _ => {}
+            }
+        }
+        assert!(mixed.iter().any(|s| s[0] && s[1]));
+        // Deeper levels keep the rule, and the hierarchy still solves.
+        let params = AmgParams {
+            coarse_dofs: 30,
+            ..AmgParams::default()
+        };
+        let amg = Amg::with_charts(a.clone(), &null, &charts, params).unwrap();
+        assert!(amg.info().level_dofs.len() >= 3);
+        let b: Vec<f64> = (0..3 * a.rows)
+            .map(|i| ((i * 7) % 5) as f64 - 2.0)
+            .collect();
+        let mut x = vec![0.0; b.len()];
+        amg_pcg(&amg, &b, &mut x, 1e-10, 200).unwrap();
+        let mut ax = vec![0.0; b.len()];
+        a.mul(&x, &mut ax);
+        let err: f64 = ax
+            .iter()
+            .zip(&b)
+            .map(|(p, q)| (p - q).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        assert!(err < 1e-8 * b.iter().map(|v| v * v).sum::<f64>().sqrt());
+        assert!(matches!(
+            Amg::with_charts(a, &null, &charts[1..], params),
+            Err(AmgError::Charts { .. })
+        ));
     }
 }

@@ -29,19 +29,30 @@ pub struct NodeBlockLayout {
     free_to_global: Vec<u32>,
     /// Rigid-body modes, 6 per global DOF, zero on constrained DOFs.
     null_space: Vec<f64>,
+    /// Per node, its side of a tied cut (empty: no cut); see
+    /// [`Amg::with_charts`].
+    charts: Vec<i8>,
 }
 
 impl NodeBlockLayout {
     /// The layout of the lower pattern `col_ptr`/`row_idx` on free DOFs,
     /// where `free_of[d]` is the free index of global DOF d (`None` when
-    /// constrained) and `nodes` the node coordinates (m).
+    /// constrained), `nodes` the node coordinates (m) and `charts` each
+    /// node's side of a tied cut (empty when nothing is tied).
     pub fn new(
         col_ptr: &[usize],
         row_idx: &[usize],
         free_of: impl Fn(usize) -> Option<usize>,
         nodes: &[[f64; 3]],
+        charts: &[i8],
     ) -> Result<Self, LinearError> {
         let n_nodes = nodes.len();
+        if !charts.is_empty() && charts.len() != n_nodes {
+            return Err(LinearError::Symbolic(format!(
+                "multigrid layout: {} node charts for {n_nodes} nodes",
+                charts.len()
+            )));
+        }
         let n_free = col_ptr.len() - 1;
         let mut free_to_global = vec![NONE; n_free];
         for d in 0..3 * n_nodes {
@@ -110,6 +121,7 @@ impl NodeBlockLayout {
             constrained_diagonal,
             free_to_global,
             null_space,
+            charts: charts.to_vec(),
         })
     }
 
@@ -136,7 +148,7 @@ impl NodeBlockLayout {
 
     /// The hierarchy of the symmetric matrix with lower values `lower`.
     pub fn build(&self, lower: &[f64], params: AmgParams) -> Result<FreeDofMultigrid, AmgError> {
-        let amg = Amg::new(self.matrix(lower), &self.null_space, params)?;
+        let amg = Amg::with_charts(self.matrix(lower), &self.null_space, &self.charts, params)?;
         let work = amg.workspace();
         Ok(FreeDofMultigrid {
             amg,
@@ -286,7 +298,7 @@ mod tests {
     #[test]
     fn the_block_matrix_holds_the_free_system_and_identity_rows() {
         let (cp, ri, v, free_of, nodes) = chain(5);
-        let layout = NodeBlockLayout::new(&cp, &ri, |d| free_of[d], &nodes).unwrap();
+        let layout = NodeBlockLayout::new(&cp, &ri, |d| free_of[d], &nodes, &[]).unwrap();
         let b = layout.matrix(&v);
         let at = |gi: usize, gj: usize| {
             b.find(gi / 3, gj / 3)
@@ -312,10 +324,22 @@ mod tests {
         }
     }
 
+    /// With and without charts (the chain's halves as the two sides of a
+    /// cut), the preconditioned GMRES solves the free system.
     #[test]
     fn preconditioned_gmres_solves_the_free_system() {
+        let (cp, ri, _, free_of, nodes) = chain(40);
+        let halves: Vec<i8> = (0..40).map(|i| if i < 20 { -1 } else { 1 }).collect();
+        for charts in [&[][..], &halves[..]] {
+            solves_with(charts);
+        }
+        let short = NodeBlockLayout::new(&cp, &ri, |d| free_of[d], &nodes, &halves[1..]);
+        assert!(matches!(short, Err(LinearError::Symbolic(m)) if m.contains("charts")));
+    }
+
+    fn solves_with(charts: &[i8]) {
         let (cp, ri, v, free_of, nodes) = chain(40);
-        let layout = NodeBlockLayout::new(&cp, &ri, |d| free_of[d], &nodes).unwrap();
+        let layout = NodeBlockLayout::new(&cp, &ri, |d| free_of[d], &nodes, charts).unwrap();
         let params = AmgParams {
             coarse_dofs: 12,
             ..AmgParams::default()

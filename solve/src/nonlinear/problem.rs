@@ -13,6 +13,10 @@ pub struct Dirichlet {
     /// Free DOFs that move as ± another free DOF (a half-turn half model's
     /// cut face).
     pub ties: Vec<crate::assembly::Tie>,
+    /// Per node, its side of the cut the ties join (+1, −1, or 0 on the
+    /// cut's axis; empty without ties): the multigrid's aggregates stay on
+    /// one side, where the rigid-body modes are rigid.
+    pub charts: Vec<i8>,
 }
 
 impl Dirichlet {

@@ -230,7 +230,13 @@ impl<'a> Driver<'a> {
         started: Instant,
     ) -> Result<Self, SolveError> {
         let mut wall = WallTimes::default();
-        let lin = LinearState::new(system, settings, &problem.model.nodes, &mut wall)?;
+        let lin = LinearState::new(
+            system,
+            settings,
+            &problem.model.nodes,
+            &problem.dirichlet.charts,
+            &mut wall,
+        )?;
         let n_total = system.dofs().n_total();
         let ws = Workspace {
             system,

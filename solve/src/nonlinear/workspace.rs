@@ -189,11 +189,13 @@ pub(crate) struct LinearState {
 impl LinearState {
     /// The symbolic analysis (Cholesky) or the node-block layout (multigrid)
     /// of `system`'s pattern, timed into `wall`; `nodes` are the model's
-    /// node coordinates (m), the multigrid's rigid-body modes.
+    /// node coordinates (m), the multigrid's rigid-body modes, and `charts`
+    /// the nodes' sides of a tied cut ([`super::problem::Dirichlet::charts`]).
     pub(crate) fn new(
         system: &System,
         settings: &SolverSettings,
         nodes: &[[f64; 3]],
+        charts: &[i8],
         wall: &mut WallTimes,
     ) -> Result<Self, LinearError> {
         let dofs = system.dofs();
@@ -204,6 +206,7 @@ impl LinearState {
                 &system.row_idx,
                 |d| dofs.owned_index(d),
                 nodes,
+                charts,
             )?;
             Kept::Multigrid {
                 layout: Box::new(layout),

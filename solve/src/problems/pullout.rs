@@ -153,6 +153,20 @@ fn tie_half_turn(model: &Model, dir: &mut Dirichlet) -> Result<(), SolveError> {
             }
         }
     }
+    // The cut face's x < 0 half is glued to its x > 0 half, so x = 0
+    // separates the sides on which the rigid-body modes stay rigid.
+    dir.charts = model
+        .nodes
+        .iter()
+        .map(|x| match x[0] {
+            v if v > 0.0 => 1,
+            v if v < 0.0 => -1,
+            _ => 0,
+        })
+        .collect();
+    for &n in &twins.axis {
+        dir.charts[n as usize] = 0;
+    }
     for &(image, source) in &twins.pairs {
         for c in 0..3 {
             let sign = if c < 2 { -1.0 } else { 1.0 };
