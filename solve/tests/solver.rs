@@ -875,7 +875,12 @@ fn resume_at(
     }
     let mut grab = Grab(at, None);
     let full = solve_pullout(m, laws, loading, settings, None, &mut grab).unwrap();
-    let dir = std::env::temp_dir().join(format!("ribbar-resume-{}-{at}", std::process::id()));
+    // One directory per call: tests of this binary run at once, and two
+    // of them may resume at the same step.
+    static CALLS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let call = CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let dir =
+        std::env::temp_dir().join(format!("ribbar-resume-{}-{at}-{call}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("state.bin");
     grab.1.unwrap().save(&path).unwrap();
