@@ -51,9 +51,9 @@ impl Bsr {
         self.col_idx.len()
     }
 
-    /// Scalar entries stored.
+    /// Scalar entries of the stored blocks.
     pub fn entries(&self) -> usize {
-        self.values.len()
+        self.col_idx.len() * self.br * self.bc
     }
 
     /// Block (i, j) position in `col_idx`, if stored.
@@ -67,14 +67,28 @@ impl Bsr {
 
     /// y = A x (parallel over block rows).
     pub fn mul(&self, x: &[f64], y: &mut [f64]) {
+        self.mul_with(&self.values, x, y);
+    }
+
+    /// y = A x with `values` (one per stored block entry, in place of
+    /// `self.values`: a single-precision copy), summed in f64.
+    pub fn mul_with<T: Copy + Into<f64> + Sync>(&self, values: &[T], x: &[f64], y: &mut [f64]) {
+        debug_assert_eq!(values.len(), self.col_idx.len() * self.br * self.bc);
         match (self.br, self.bc) {
-            (3, 3) => self.mul_fixed::<3, 3>(x, y),
-            (6, 6) => self.mul_fixed::<6, 6>(x, y),
-            _ => self.mul_any(x, y),
+            (3, 3) => self.mul_fixed::<3, 3, T>(values, x, y),
+            (6, 6) => self.mul_fixed::<6, 6, T>(values, x, y),
+            (3, 6) => self.mul_fixed::<3, 6, T>(values, x, y),
+            (6, 3) => self.mul_fixed::<6, 3, T>(values, x, y),
+            _ => self.mul_any(values, x, y),
         }
     }
 
-    fn mul_fixed<const R: usize, const C: usize>(&self, x: &[f64], y: &mut [f64]) {
+    fn mul_fixed<const R: usize, const C: usize, T: Copy + Into<f64> + Sync>(
+        &self,
+        values: &[T],
+        x: &[f64],
+        y: &mut [f64],
+    ) {
         y.par_chunks_mut(R * 256)
             .enumerate()
             .for_each(|(chunk, ys)| {
@@ -83,12 +97,12 @@ impl Bsr {
                     let mut acc = [0.0f64; R];
                     for k in self.row_ptr[i]..self.row_ptr[i + 1] {
                         let j = self.col_idx[k] as usize;
-                        let blk = &self.values[k * R * C..(k + 1) * R * C];
+                        let blk = &values[k * R * C..(k + 1) * R * C];
                         let xj = &x[j * C..(j + 1) * C];
                         for r in 0..R {
                             let mut s = 0.0;
                             for c in 0..C {
-                                s += blk[r * C + c] * xj[c];
+                                s += blk[r * C + c].into() * xj[c];
                             }
                             acc[r] += s;
                         }
@@ -98,17 +112,17 @@ impl Bsr {
             });
     }
 
-    fn mul_any(&self, x: &[f64], y: &mut [f64]) {
+    fn mul_any<T: Copy + Into<f64> + Sync>(&self, values: &[T], x: &[f64], y: &mut [f64]) {
         let (br, bc) = (self.br, self.bc);
         y.par_chunks_mut(br).enumerate().for_each(|(i, yi)| {
             yi.iter_mut().for_each(|v| *v = 0.0);
             for k in self.row_ptr[i]..self.row_ptr[i + 1] {
                 let j = self.col_idx[k] as usize;
-                let blk = &self.values[k * br * bc..(k + 1) * br * bc];
+                let blk = &values[k * br * bc..(k + 1) * br * bc];
                 for r in 0..br {
                     let mut s = 0.0;
                     for c in 0..bc {
-                        s += blk[r * bc + c] * x[j * bc + c];
+                        s += blk[r * bc + c].into() * x[j * bc + c];
                     }
                     yi[r] += s;
                 }
@@ -284,15 +298,33 @@ pub enum AmgError {
     NonFinite { iteration: usize },
 }
 
+/// One level of the hierarchy. The cycle reads the level's operators from
+/// single-precision copies of their values (sums in f64): the products are
+/// bound by memory traffic, which f32 values halve, and a preconditioner
+/// needs no more than f32's 6e-8 relative rounding. The f64 values are
+/// dropped after the set-up, except the finest matrix's ([`Amg::matrix`]).
 struct Level {
     a: Bsr,
+    a32: Vec<f32>,
     /// Inverse diagonal blocks.
     dinv: Vec<f64>,
     /// Chebyshev interval of D⁻¹A.
     lo: f64,
     hi: f64,
     p: Bsr,
+    p32: Vec<f32>,
     r: Bsr,
+    r32: Vec<f32>,
+}
+
+/// The single-precision copy of `m`'s values; `keep` false drops the f64
+/// values.
+fn single_precision(m: &mut Bsr, keep: bool) -> Vec<f32> {
+    let v = m.values.iter().map(|&x| x as f32).collect();
+    if !keep {
+        m.values = Vec::new();
+    }
+    v
 }
 
 /// A smoothed-aggregation hierarchy.
@@ -795,15 +827,19 @@ impl Amg {
                 }
             }
             let hi = 1.1 * lam;
+            let mut fine = std::mem::replace(&mut a, ac);
+            let (mut p, mut r) = (p, r);
             levels.push(Level {
-                a,
+                a32: single_precision(&mut fine, level == 0),
+                a: fine,
                 dinv,
                 lo: hi * params.smoother_range,
                 hi,
+                p32: single_precision(&mut p, false),
                 p,
+                r32: single_precision(&mut r, false),
                 r,
             });
-            a = ac;
             null = coarse_null;
             charts = coarse_charts;
         }
@@ -848,7 +884,7 @@ impl Amg {
             r.copy_from_slice(b);
             x.par_iter_mut().for_each(|v| *v = 0.0);
         } else {
-            lev.a.mul(x, ad);
+            lev.a.mul_with(&lev.a32, x, ad);
             r.par_iter_mut()
                 .zip(b.par_iter().zip(ad.par_iter()))
                 .for_each(|(ri, (bi, ai))| *ri = bi - ai);
@@ -865,7 +901,7 @@ impl Amg {
             if k + 1 == deg {
                 break;
             }
-            lev.a.mul(d, ad);
+            lev.a.mul_with(&lev.a32, d, ad);
             r.par_iter_mut()
                 .zip(ad.par_iter())
                 .for_each(|(ri, ai)| *ri -= ai);
@@ -889,18 +925,18 @@ impl Amg {
         self.chebyshev(l, b, x, true, ws);
         {
             let (res, ad) = (&mut ws.res[l], &mut ws.ad[l]);
-            lev.a.mul(x, ad);
+            lev.a.mul_with(&lev.a32, x, ad);
             res.par_iter_mut()
                 .zip(b.par_iter().zip(ad.par_iter()))
                 .for_each(|(ri, (bi, ai))| *ri = bi - ai);
         }
         let mut bc = std::mem::take(&mut ws.bc[l]);
         let mut xc = std::mem::take(&mut ws.xc[l]);
-        lev.r.mul(&ws.res[l], &mut bc);
+        lev.r.mul_with(&lev.r32, &ws.res[l], &mut bc);
         self.cycle(l + 1, &bc, &mut xc, ws)?;
         {
             let corr = &mut ws.ad[l];
-            lev.p.mul(&xc, corr);
+            lev.p.mul_with(&lev.p32, &xc, corr);
             x.par_iter_mut()
                 .zip(corr.par_iter())
                 .for_each(|(xi, ci)| *xi += ci);
@@ -1106,6 +1142,32 @@ mod tests {
         for i in 0..15 {
             let e: f64 = (0..24).map(|k| da[i][k] * x[k]).sum();
             assert!((e - y[i]).abs() < 1e-9);
+        }
+        // The 6×3 kernel (the restriction's blocks), and the products with
+        // single-precision values, which round each value once.
+        let at = a.transpose();
+        let xt: Vec<f64> = (0..15).map(|i| (i as f64).cos()).collect();
+        let mut yt = vec![0.0; 24];
+        at.mul(&xt, &mut yt);
+        let dt = dense(&at);
+        for i in 0..24 {
+            let e: f64 = (0..15).map(|k| dt[i][k] * xt[k]).sum();
+            assert!((e - yt[i]).abs() < 1e-9);
+        }
+        let sample32 = |m: &Bsr| {
+            m.values
+                .iter()
+                .map(|&v| v as f32 + 0.25)
+                .collect::<Vec<f32>>()
+        };
+        for (m, x) in [(&a, &x), (&at, &xt)] {
+            let v32 = sample32(m);
+            let mut shifted = m.clone();
+            shifted.values = v32.iter().map(|&v| v as f64).collect();
+            let (mut y64, mut y32) = (vec![0.0; m.rows * m.br], vec![0.0; m.rows * m.br]);
+            shifted.mul(x, &mut y64);
+            m.mul_with(&v32, x, &mut y32);
+            assert_eq!(y64, y32);
         }
         let mut m = vec![4.0, 1.0, 0.5, 1.0, 3.0, 0.2, 0.5, 0.2, 2.0];
         let orig = m.clone();
