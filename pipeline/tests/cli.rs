@@ -103,6 +103,23 @@ fn run_writes_every_artifact() {
     assert!(summary
         .pointer("/solver/summary/wall_time_s/factorisation")
         .is_some());
+    // The peak fields are those of the first peak's step (kept in memory
+    // and written once the curve has dropped past it).
+    let step_at_peak = summary
+        .pointer("/curve/step_at_peak")
+        .and_then(|v| v.as_u64())
+        .unwrap();
+    let profile = read(&scene.join("interface_profile.csv"));
+    let steps: std::collections::BTreeSet<u64> = profile
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').next().unwrap().parse().unwrap())
+        .collect();
+    assert!(
+        steps.contains(&step_at_peak),
+        "{steps:?} lacks {step_at_peak}"
+    );
+    assert_eq!(steps.len(), 3, "step 2, the peak and the end: {steps:?}");
     let vtu = read(&scene.join("fields/peak_bulk.vtu"));
     assert!(
         vtu.contains("<VTKFile") && vtu.contains("Name=\"D\"") && vtu.contains("principal_stress")

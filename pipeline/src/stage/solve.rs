@@ -15,7 +15,8 @@ use super::ctx::Ctx;
 use super::kinds::{Stage, CHECKPOINT_FILE};
 use anyhow::Result;
 use mesh::Model;
-use solve::assembly::ElementLaws;
+use solve::assembly::{ElementLaws, States};
+use solve::curve::CurveRow;
 use solve::energy::{EnergyRow, EnergyStart, EnergyTracker, ENERGY_TOLERANCE};
 use solve::fields::ProfileRow;
 use solve::nonlinear::{
@@ -49,51 +50,64 @@ struct StageObserver<'a> {
     /// `post::FIRST_PEAK_DROP`: the peak fields are then the adhesion peak's
     /// and a later frictional maximum does not replace them.
     peak_passed: bool,
+    /// The state of the highest step so far, while the peak is not passed:
+    /// written once (when the curve has dropped past it, before a
+    /// checkpoint, and at the end), not at every rising step. On R1 the
+    /// rising branch is 24 steps of 60 MB of fields each.
+    pending_peak: Option<PeakState>,
     error: Option<anyhow::Error>,
     cutbacks: Vec<String>,
     /// The energy balance; `Err` says why it is not available.
     energy: std::result::Result<EnergyTracker<'a>, String>,
 }
 
+/// A converged state kept for the peak fields.
+struct PeakState {
+    row: CurveRow,
+    u: Vec<f64>,
+    states: States,
+}
+
 impl StageObserver<'_> {
     fn write_fields(
         &mut self,
         name: &str,
-        report: &StepReport,
-        view: &CommittedView<'_>,
+        row: &CurveRow,
+        model: &Model,
+        (u, states): (&[f64], &States),
     ) -> Result<()> {
         std::fs::create_dir_all(&self.fields_dir)?;
-        let model = view.model;
         solve::fields::write_bulk_vtu(
             &self.fields_dir.join(format!("{name}_bulk.vtu")),
             model,
             self.laws,
-            view.u,
-            view.states,
+            u,
+            states,
             self.whole.as_ref(),
         )?;
         solve::fields::write_interface_vtu(
             &self.fields_dir.join(format!("{name}_interface.vtu")),
             model,
             self.laws,
-            view.u,
-            view.states,
+            u,
+            states,
             self.whole.as_ref(),
         )?;
-        let rows = solve::fields::profile_rows(
-            model,
-            self.laws,
-            view.u,
-            view.states,
-            report.row.step,
-            report.row.fed,
-        );
+        let rows = solve::fields::profile_rows(model, self.laws, u, states, row.step, row.fed);
         if name == "peak" {
             self.peak_profile = rows;
         } else {
             self.profile.extend(rows);
         }
         Ok(())
+    }
+
+    /// Writes the kept peak state's fields, if one is waiting.
+    fn write_pending_peak(&mut self, model: &Model) -> Result<()> {
+        match self.pending_peak.take() {
+            Some(p) => self.write_fields("peak", &p.row, model, (&p.u, &p.states)),
+            None => Ok(()),
+        }
     }
 }
 
@@ -142,15 +156,28 @@ impl Observer for StageObserver<'_> {
         }
         let request = &self.ctx.scene.outputs.fields;
         let mut result = Ok(());
+        let state = (view.u, view.states);
         if request.steps.contains(&r.step) {
-            result = self.write_fields(&format!("step{:04}", r.step), report, view);
+            result = self.write_fields(&format!("step{:04}", r.step), r, view.model, state);
         }
-        if r.bond_stress < (1.0 - crate::post::FIRST_PEAK_DROP) * self.peak {
+        if r.bond_stress < (1.0 - crate::post::FIRST_PEAK_DROP) * self.peak && !self.peak_passed {
             self.peak_passed = true;
+            result = result.and_then(|()| self.write_pending_peak(view.model));
         }
         if request.at_peak && !self.peak_passed && r.bond_stress > self.peak && result.is_ok() {
             self.peak = r.bond_stress;
-            result = self.write_fields("peak", report, view);
+            self.pending_peak = Some(PeakState {
+                row: *r,
+                u: view.u.to_vec(),
+                states: view.states.clone(),
+            });
+        }
+        if result.is_ok()
+            && self.last_checkpoint.elapsed() >= self.checkpoint_cost * CHECKPOINT_COST_RATIO
+        {
+            // The checkpoint's run has its peak fields on disk: a resumed
+            // run never rewrites a peak it has already passed.
+            result = self.write_pending_peak(view.model);
         }
         if result.is_ok()
             && self.last_checkpoint.elapsed() >= self.checkpoint_cost * CHECKPOINT_COST_RATIO
@@ -216,6 +243,7 @@ pub fn run(ctx: &Ctx, out: &Path) -> Result<()> {
         checkpoint_cost: Duration::ZERO,
         peak: peak_so_far,
         peak_passed,
+        pending_peak: None,
         error: None,
         cutbacks: Vec::new(),
         energy,
@@ -233,8 +261,9 @@ pub fn run(ctx: &Ctx, out: &Path) -> Result<()> {
         return Err(e.context("writing solve outputs"));
     }
     let (result, stopped) = split_outcome(outcome)?;
+    observer.write_pending_peak(&model)?;
     if ctx.scene.outputs.fields.at_end {
-        write_end_fields(&mut observer, &model, &laws, &result)?;
+        write_end_fields(&mut observer, &model, &result)?;
     }
     write_collection(&observer.fields_dir, &result.rows, observer.peak)?;
     let profile = [observer.profile.as_slice(), &observer.peak_profile].concat();
@@ -354,28 +383,11 @@ fn split_outcome(
 fn write_end_fields(
     observer: &mut StageObserver<'_>,
     model: &Model,
-    laws: &ElementLaws,
     result: &RunResult,
 ) -> Result<()> {
-    let last = result.rows.last().copied();
-    if let Some(row) = last {
+    if let Some(row) = result.rows.last() {
         let cp = &result.last;
-        let view = CommittedView {
-            model,
-            laws,
-            checkpoint: &|| cp.clone(),
-            u: &cp.u,
-            states: &cp.states,
-        };
-        let report = StepReport {
-            row,
-            step_size: 0.0,
-            times: Default::default(),
-            residual_history: Vec::new(),
-            force_only: false,
-            impl_ex_residual: None,
-        };
-        observer.write_fields("end", &report, &view)?;
+        observer.write_fields("end", row, model, (&cp.u, &cp.states))?;
     }
     Ok(())
 }
