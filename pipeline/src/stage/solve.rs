@@ -260,8 +260,10 @@ pub fn run(ctx: &Ctx, out: &Path) -> Result<()> {
     if let Some(e) = observer.error.take() {
         return Err(e.context("writing solve outputs"));
     }
+    // The peak's fields go to disk whatever the outcome.
+    let peak_written = observer.write_pending_peak(&model);
     let (result, stopped) = split_outcome(outcome)?;
-    observer.write_pending_peak(&model)?;
+    peak_written?;
     if ctx.scene.outputs.fields.at_end {
         write_end_fields(&mut observer, &model, &result)?;
     }
