@@ -389,14 +389,14 @@ pub fn pcg(
     })
 }
 
-/// A general (possibly unsymmetric) square matrix in the symmetric pattern
-/// of [`SymLower`]: `lower[k]` = A_ij and `upper[k]` = A_ji for the stored
-/// position k = (i, j), i ≥ j (see `assembly::Outputs::upper`).
 /// Unknowns from which [`SplitMatrix::mul`] runs in parallel.
 pub const PARALLEL_PRODUCT_DOFS: usize = 50_000;
 /// Column ranges of a parallel [`SplitMatrix::mul`].
 pub const PRODUCT_PARTS: usize = 4;
 
+/// A general (possibly unsymmetric) square matrix in the symmetric pattern
+/// of [`SymLower`]: `lower[k]` = A_ij and `upper[k]` = A_ji for the stored
+/// position k = (i, j), i ≥ j (see `assembly::Outputs::upper`).
 #[derive(Debug, Clone, Copy)]
 pub struct SplitMatrix<'a> {
     pub col_ptr: &'a [usize],
@@ -430,9 +430,7 @@ impl SplitMatrix<'_> {
         }
         cuts.push(n);
         let parts: Vec<Vec<f64>> = cuts
-            .windows(2)
-            .collect::<Vec<_>>()
-            .into_par_iter()
+            .par_windows(2)
             .map(|w| {
                 let mut part = vec![0.0; n];
                 self.mul_columns(w[0]..w[1], x, &mut part);
