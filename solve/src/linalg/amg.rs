@@ -468,9 +468,9 @@ fn lambda_max(a: &Bsr, dinv: &[f64]) -> f64 {
 /// tied across a cut (a half-turn half) has rigid-body modes that are
 /// rigid only within one side of the cut; an aggregate reaching across
 /// would take a mode that jumps there into the coarse space. Returns also
-/// each aggregate's chart (its members' non-zero chart, or 0), the charts
-/// of the next level.
-fn aggregate(a: &Bsr, theta: f64, charts: &[i8]) -> (Vec<u32>, usize, Vec<i8>) {
+/// each aggregate's chart (its members' non-zero chart, or 0), one per
+/// aggregate: the charts of the next level.
+fn aggregate(a: &Bsr, theta: f64, charts: &[i8]) -> (Vec<u32>, Vec<i8>) {
     let n = a.rows;
     let bsz = a.br * a.bc;
     let chart = |i: usize| charts.get(i).copied().unwrap_or(0);
@@ -567,8 +567,7 @@ fn aggregate(a: &Bsr, theta: f64, charts: &[i8]) -> (Vec<u32>, usize, Vec<i8>) {
         }
         agg_chart.push(c);
     }
-    let count = agg_chart.len();
-    (agg, count, agg_chart)
+    (agg, agg_chart)
 }
 
 /// Tentative prolongator (br = block size of `a`, bc = 6) and the coarse
@@ -800,7 +799,8 @@ impl Amg {
             }
             let dinv = block_diag_inverse(&a, level)?;
             let lam = lambda_max(&a, &dinv);
-            let (agg, n_agg, coarse_charts) = aggregate(&a, params.strength, &charts);
+            let (agg, coarse_charts) = aggregate(&a, params.strength, &charts);
+            let n_agg = coarse_charts.len();
             if n_agg == 0 || 6 * n_agg >= n {
                 break;
             }
@@ -1237,9 +1237,8 @@ mod tests {
     #[test]
     fn aggregates_stay_on_one_side_of_a_cut() {
         let (a, charts, null) = grid(15, 9);
-        let (agg, n_agg, coarse) = aggregate(&a, 0.0, &charts);
-        assert_eq!(coarse.len(), n_agg);
-        let mut sides = vec![[false; 2]; n_agg];
+        let (agg, coarse) = aggregate(&a, 0.0, &charts);
+        let mut sides = vec![[false; 2]; coarse.len()];
         for (i, &g) in agg.iter().enumerate() {
             assert_ne!(g, u32::MAX, "node {i} left out");
             match charts[i] {
@@ -1252,9 +1251,9 @@ mod tests {
             }
         }
         assert!(sides.iter().all(|s| !(s[0] && s[1])));
-        let (free_agg, free_n, free_coarse) = aggregate(&a, 0.0, &[]);
+        let (free_agg, free_coarse) = aggregate(&a, 0.0, &[]);
         assert!(free_coarse.iter().all(|&c| c == 0));
-        let mut mixed = vec![[false; 2]; free_n];
+        let mut mixed = vec![[false; 2]; free_coarse.len()];
         for (i, &g) in free_agg.iter().enumerate() {
             match charts[i] {
                 1 => mixed[g as usize][0] = true,
