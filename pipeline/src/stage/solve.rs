@@ -178,23 +178,21 @@ impl Observer for StageObserver<'_> {
             // The checkpoint's run has its peak fields on disk: a resumed
             // run never rewrites a peak it has already passed.
             result = self.write_pending_peak(view.model);
-        }
-        if result.is_ok()
-            && self.last_checkpoint.elapsed() >= self.checkpoint_cost * CHECKPOINT_COST_RATIO
-        {
-            let started = Instant::now();
-            let mut checkpoint = (view.checkpoint)();
-            checkpoint.record = ObserverRecord {
-                energy: self
-                    .energy
-                    .as_ref()
-                    .map_or_else(|_| Vec::new(), |t| t.rows().to_vec()),
-                profile: self.profile.clone(),
-                peak_profile: self.peak_profile.clone(),
-            };
-            result = checkpoint.save(&self.checkpoint_path).map_err(Into::into);
-            self.checkpoint_cost = started.elapsed();
-            self.last_checkpoint = Instant::now();
+            if result.is_ok() {
+                let started = Instant::now();
+                let mut checkpoint = (view.checkpoint)();
+                checkpoint.record = ObserverRecord {
+                    energy: self
+                        .energy
+                        .as_ref()
+                        .map_or_else(|_| Vec::new(), |t| t.rows().to_vec()),
+                    profile: self.profile.clone(),
+                    peak_profile: self.peak_profile.clone(),
+                };
+                result = checkpoint.save(&self.checkpoint_path).map_err(Into::into);
+                self.checkpoint_cost = started.elapsed();
+                self.last_checkpoint = Instant::now();
+            }
         }
         if let Err(e) = result {
             self.error = Some(e);
