@@ -822,3 +822,80 @@ fn a_fixed_scale_is_the_tangent_over_the_elastic_stiffness_for_every_strain() {
         }
     }
 }
+
+/// A held interface point (the solver's retry of a step in which the point
+/// kept switching regime) keeps its history whatever the jump, its
+/// consistent tangent is the derivative of its traction, and held at the
+/// history the law reaches at a jump it gives the law's own traction
+/// there: what lets the solver settle a hold by re-holding the point at its
+/// implicit history until the equilibrium no longer moves. For every
+/// interface law, along random paths through loading, unloading, sticking
+/// and sliding.
+#[test]
+fn held_points_keep_their_history_and_give_the_laws_traction_once_settled() {
+    let laws: Vec<(&str, Box<dyn InterfaceLaw>)> = vec![
+        ("fczm", Box::new(fczm())),
+        ("fczm calibrated", Box::new(fczm_calibrated())),
+        ("tvergaard", Box::new(tvergaard())),
+        ("coulomb", Box::new(coulomb())),
+    ];
+    let mut rng = Lcg(11);
+    for (name, law) in &laws {
+        let mut committed = InterfaceState::default();
+        let mut held_elsewhere = 0;
+        for step in 0..60 {
+            let mut u = Vector3::new(rng.next() * 6e-5, rng.next() * 1.2e-4, rng.next() * 4e-5);
+            if u[0].abs() < 1e-6 {
+                u[0] = 1e-6;
+            }
+            let implicit = law.step(&committed, &u, TangentKind::Consistent).unwrap();
+            // Held at the implicit history: the law's traction.
+            let settled = law
+                .held_step(&implicit.state, &u, TangentKind::Consistent)
+                .unwrap();
+            // Rounding: the return map subtracts slip from jumps of the
+            // elastic traction's size.
+            let scale = law.elastic_stiffness().amax() * u.amax();
+            assert!(
+                (settled.traction - implicit.traction).amax() <= 1e-9 * scale,
+                "{name}, step {step}: held {:?} vs law {:?}",
+                settled.traction,
+                implicit.traction
+            );
+            // Held at the committed history, at a jump twice as far: no
+            // damage growth, no slip, and the exact tangent.
+            let far = u * 2.0;
+            let held = law
+                .held_step(&committed, &far, TangentKind::Consistent)
+                .unwrap();
+            assert_eq!(held.state, committed, "{name}, step {step}");
+            let h = 1e-6 * far.amax();
+            let mut fd = Matrix3::zeros();
+            for j in 0..3 {
+                let (mut p, mut m) = (far, far);
+                p[j] += h;
+                m[j] -= h;
+                let tp = law
+                    .held_step(&committed, &p, TangentKind::Consistent)
+                    .unwrap();
+                let tm = law
+                    .held_step(&committed, &m, TangentKind::Consistent)
+                    .unwrap();
+                fd.set_column(j, &((tp.traction - tm.traction) / (2.0 * h)));
+            }
+            assert!(
+                (fd - held.tangent).amax() <= 1e-5 * held.tangent.amax(),
+                "{name}, step {step}: held tangent\n{}vs finite differences\n{}",
+                held.tangent,
+                fd
+            );
+            let law_far = law.step(&committed, &far, TangentKind::Consistent).unwrap();
+            if law_far.state != committed {
+                held_elsewhere += 1;
+            }
+            committed = implicit.state;
+        }
+        // The paths did reach jumps where the law's history would move.
+        assert!(held_elsewhere >= 10, "{name}: {held_elsewhere}");
+    }
+}

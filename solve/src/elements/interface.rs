@@ -101,9 +101,31 @@ impl InterfaceKernel {
         }; INTERFACE_POINTS];
         for (point, (o, state)) in out.iter_mut().zip(committed).enumerate() {
             let jump = self.local_jump(&ue, point);
-            let law = law
-                .step(state, &jump, kind)
-                .map_err(|source| PointError { point, source })?;
+            let law = match state.held {
+                None => law.step(state, &jump, kind),
+                // Held by the solver: the traction at the held history,
+                // the state the law's own update (what settles the hold).
+                Some(held) => law
+                    .step(
+                        &InterfaceState {
+                            held: None,
+                            ..*state
+                        },
+                        &jump,
+                        kind,
+                    )
+                    .and_then(|implicit| {
+                        let at_held = law.held_step(&held.state(), &jump, kind)?;
+                        Ok(InterfaceResponse {
+                            state: InterfaceState {
+                                held: Some(held),
+                                ..implicit.state
+                            },
+                            ..at_held
+                        })
+                    }),
+            }
+            .map_err(|source| PointError { point, source })?;
             *o = PointResponse { jump, law };
         }
         Ok(out)

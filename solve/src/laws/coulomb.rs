@@ -78,17 +78,18 @@ pub(crate) fn slip_return(us: Vector2<f64>, slip: Vector2<f64>, ks: f64, ty: f64
 }
 
 impl InterfaceLaw for Coulomb {
-    fn step(
+    fn respond(
         &self,
         committed: &InterfaceState,
         jump: &Vector3<f64>,
         kind: TangentKind,
+        evolve: bool,
     ) -> Result<InterfaceResponse, LawError> {
         const LAW: &str = "coulomb";
         check_finite(LAW, "jump", jump.as_slice())?;
         let (kn, ks) = (self.normal_stiffness, self.shear_stiffness);
         let tan_phi = self.friction_angle.tan();
-        let separated = committed.damage >= 1.0 || kn * jump[0] > self.tensile_strength;
+        let separated = committed.damage >= 1.0 || (evolve && kn * jump[0] > self.tensile_strength);
         let (sn, dsn, ty) = if separated {
             let sn = kn * jump[0].min(0.0);
             (sn, if jump[0] < 0.0 { kn } else { 0.0 }, -sn * tan_phi)
@@ -96,7 +97,7 @@ impl InterfaceLaw for Coulomb {
             let sn = kn * jump[0];
             (sn, kn, self.cohesion - sn * tan_phi)
         };
-        let ty = ty.max(0.0);
+        let ty = if evolve { ty.max(0.0) } else { f64::INFINITY };
         let ret = slip_return(
             Vector2::new(jump[1], jump[2]),
             Vector2::new(committed.slip[0], committed.slip[1]),
@@ -131,6 +132,7 @@ impl InterfaceLaw for Coulomb {
                 lambda_max: committed.lambda_max,
                 damage: if separated { 1.0 } else { committed.damage },
                 slip: [ret.slip[0], ret.slip[1]],
+                held: None,
             },
         })
     }

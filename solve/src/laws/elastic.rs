@@ -77,11 +77,13 @@ pub struct ElasticInterface {
 }
 
 impl InterfaceLaw for ElasticInterface {
-    fn step(
+    /// No history to evolve or hold.
+    fn respond(
         &self,
         committed: &InterfaceState,
         jump: &Vector3<f64>,
         _kind: TangentKind,
+        _evolve: bool,
     ) -> Result<InterfaceResponse, LawError> {
         if !jump.iter().all(|v| v.is_finite()) {
             return Err(LawError::NonFiniteInput {

@@ -167,10 +167,11 @@ struct Undamaged {
 }
 
 impl Fczm {
-    fn damage(&self, committed: &InterfaceState, jump: &Vector3<f64>) -> Damage {
+    /// `evolve`: whether λ̃ may grow (false: held, see `held_step`).
+    fn damage(&self, committed: &InterfaceState, jump: &Vector3<f64>, evolve: bool) -> Damage {
         let c = self.tensile_strength / (self.zeta * self.fracture_energy);
         let (lam, dlam) = opening(jump, self.delta_s);
-        let loading = lam - self.lambda0 > committed.lambda_max;
+        let loading = evolve && lam - self.lambda0 > committed.lambda_max;
         let lt = if loading {
             lam - self.lambda0
         } else {
@@ -279,11 +280,12 @@ impl Fczm {
 }
 
 impl InterfaceLaw for Fczm {
-    fn step(
+    fn respond(
         &self,
         committed: &InterfaceState,
         jump: &Vector3<f64>,
         kind: TangentKind,
+        evolve: bool,
     ) -> Result<InterfaceResponse, LawError> {
         const LAW: &str = "fczm";
         check_finite(LAW, "jump", jump.as_slice())?;
@@ -291,7 +293,7 @@ impl InterfaceLaw for Fczm {
         let un = jump[0];
         let us = Vector2::new(jump[1], jump[2]);
 
-        let dmg = self.damage(committed, jump);
+        let dmg = self.damage(committed, jump, evolve);
         let Damage { lt, d, dd, .. } = dmg;
 
         // Damaged part: no tension, Coulomb friction (16–21).
@@ -302,7 +304,11 @@ impl InterfaceLaw for Fczm {
             us,
             Vector2::new(committed.slip[0], committed.slip[1]),
             ks,
-            -self.friction * sdn,
+            if evolve {
+                -self.friction * sdn
+            } else {
+                f64::INFINITY
+            },
         );
 
         let Undamaged {
@@ -353,6 +359,7 @@ impl InterfaceLaw for Fczm {
                 lambda_max: lt,
                 damage: d.max(committed.damage),
                 slip: [ret.slip[0], ret.slip[1]],
+                held: None,
             },
         })
     }

@@ -94,6 +94,42 @@ pub struct InterfaceState {
     pub damage: f64,
     /// Plastic (frictional) slip in the local tangential plane (t, h), m.
     pub slip: [f64; 2],
+    /// The history this point's traction is held at in the step being
+    /// attempted (the solver's retry of a step in which the point kept
+    /// switching regime between Newton iterates); `None`: the traction
+    /// follows the law. The state itself still evolves by the law.
+    #[serde(default)]
+    pub held: Option<HeldHistory>,
+}
+
+/// An interface point's history as the solver holds it for one step: the
+/// traction is the law's at this λ̃, D and slip, with no damage growth and
+/// no slip (see [`InterfaceLaw::held_step`]).
+#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize, serde::Deserialize)]
+pub struct HeldHistory {
+    pub lambda_max: f64,
+    pub damage: f64,
+    pub slip: [f64; 2],
+}
+
+impl HeldHistory {
+    /// The history of `state`.
+    pub fn of(state: &InterfaceState) -> Self {
+        Self {
+            lambda_max: state.lambda_max,
+            damage: state.damage,
+            slip: state.slip,
+        }
+    }
+    /// The state with this history and no hold.
+    pub fn state(&self) -> InterfaceState {
+        InterfaceState {
+            lambda_max: self.lambda_max,
+            damage: self.damage,
+            slip: self.slip,
+            held: None,
+        }
+    }
 }
 
 /// Result of an interface step.
@@ -148,12 +184,41 @@ pub trait BulkLaw: Sync {
 
 /// An interface constitutive law in the local frame.
 pub trait InterfaceLaw: Sync {
+    /// The response at `jump` from `committed`. With `evolve` the history
+    /// follows the law (damage growth, slip); without, it is held as it
+    /// is: the law's traction with no damage growth and no slip, its exact
+    /// tangent for `Consistent` (a smooth function of the jump but for the
+    /// open/closed switch). A point Newton cannot settle is held so for
+    /// one attempt, then released to its implicit history (docs/solver.md,
+    /// "Law switches").
+    fn respond(
+        &self,
+        committed: &InterfaceState,
+        jump: &Vector3<f64>,
+        kind: TangentKind,
+        evolve: bool,
+    ) -> Result<InterfaceResponse, LawError>;
+    /// The law's step from `committed` at `jump`.
     fn step(
         &self,
         committed: &InterfaceState,
         jump: &Vector3<f64>,
         kind: TangentKind,
-    ) -> Result<InterfaceResponse, LawError>;
+    ) -> Result<InterfaceResponse, LawError> {
+        self.respond(committed, jump, kind, true)
+    }
+    /// The response with the history of `history` held; the state returned
+    /// is `history`.
+    fn held_step(
+        &self,
+        history: &InterfaceState,
+        jump: &Vector3<f64>,
+        kind: TangentKind,
+    ) -> Result<InterfaceResponse, LawError> {
+        let mut response = self.respond(history, jump, kind, false)?;
+        response.state = *history;
+        Ok(response)
+    }
     /// The initial (undamaged) stiffness diag(K_n, K_s, K_s), N/m³.
     fn elastic_stiffness(&self) -> Matrix3<f64>;
     /// Recoverable energy per area (J/m²) at `jump` with `traction`, the
@@ -224,17 +289,18 @@ impl AnyInterfaceLaw {
 }
 
 impl InterfaceLaw for AnyInterfaceLaw {
-    fn step(
+    fn respond(
         &self,
         committed: &InterfaceState,
         jump: &Vector3<f64>,
         kind: TangentKind,
+        evolve: bool,
     ) -> Result<InterfaceResponse, LawError> {
         match self {
-            AnyInterfaceLaw::Fczm(l) => l.step(committed, jump, kind),
-            AnyInterfaceLaw::Tvergaard(l) => l.step(committed, jump, kind),
-            AnyInterfaceLaw::Coulomb(l) => l.step(committed, jump, kind),
-            AnyInterfaceLaw::Elastic(l) => l.step(committed, jump, kind),
+            AnyInterfaceLaw::Fczm(l) => l.respond(committed, jump, kind, evolve),
+            AnyInterfaceLaw::Tvergaard(l) => l.respond(committed, jump, kind, evolve),
+            AnyInterfaceLaw::Coulomb(l) => l.respond(committed, jump, kind, evolve),
+            AnyInterfaceLaw::Elastic(l) => l.respond(committed, jump, kind, evolve),
         }
     }
 

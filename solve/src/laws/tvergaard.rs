@@ -65,18 +65,19 @@ impl Tvergaard {
 }
 
 impl InterfaceLaw for Tvergaard {
-    fn step(
+    fn respond(
         &self,
         committed: &InterfaceState,
         jump: &Vector3<f64>,
         kind: TangentKind,
+        evolve: bool,
     ) -> Result<InterfaceResponse, LawError> {
         const LAW: &str = "tvergaard";
         check_finite(LAW, "jump", jump.as_slice())?;
         let (kn, ks) = (self.normal_stiffness(), self.shear_stiffness());
         let c = self.tensile_strength / self.fracture_energy;
         let (lam, dlam) = opening(jump, self.delta_s);
-        let loading = lam - self.lambda0 > committed.lambda_max;
+        let loading = evolve && lam - self.lambda0 > committed.lambda_max;
         let lt = if loading {
             lam - self.lambda0
         } else {
@@ -113,6 +114,7 @@ impl InterfaceLaw for Tvergaard {
                 lambda_max: lt,
                 damage: (1.0 - (-c * lt).exp()).max(committed.damage),
                 slip: committed.slip,
+                held: None,
             },
         })
     }
