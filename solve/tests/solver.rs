@@ -1462,19 +1462,17 @@ impl Observer for Trace {
 /// Where the bond's softening releases more energy than the bar can take
 /// back, displacement control finds no equilibrium past the peak and
 /// stops; dissipation control follows the path back in the imposed
-/// displacement and on to the end (SPEC §6 path-following).
+/// displacement and on to the end (SPEC §6 path-following), from the
+/// start (`energy`) or from where displacement control stops (`auto`).
 #[test]
 fn dissipation_control_follows_a_snap_back() {
     let (m, laws, loading) = snap_back_case();
     let mut dtrace = Trace(Vec::new());
-    let displacement = solve_pullout(
-        &m,
-        &laws,
-        &loading,
-        &SolverSettings::default(),
-        None,
-        &mut dtrace,
-    );
+    let displacement_only = SolverSettings {
+        path_following: PathFollowing::Off,
+        ..SolverSettings::default()
+    };
+    let displacement = solve_pullout(&m, &laws, &loading, &displacement_only, None, &mut dtrace);
     assert!(
         matches!(displacement, Err(SolveError::Stalled { .. })),
         "displacement control should stop at the snap-back"
@@ -1495,6 +1493,26 @@ fn dissipation_control_follows_a_snap_back() {
         "{:?}",
         res.ending
     );
+    // The default, `auto`, hands over where displacement control stops
+    // and also follows the path to its end.
+    let mut atrace = Trace(Vec::new());
+    let auto = solve_pullout(
+        &m,
+        &laws,
+        &loading,
+        &SolverSettings::default(),
+        None,
+        &mut atrace,
+    );
+    assert!(
+        matches!(
+            auto.as_ref().map(|r| &r.ending),
+            Ok(Ending::Unloaded { .. })
+        ),
+        "{:?}",
+        auto.map(|r| r.ending)
+    );
+    assert!(atrace.0.windows(2).any(|w| w[1].0 < w[0].0 - 1e-12));
     // A run resumed from a checkpoint taken under dissipation control, on
     // the way back in λ, ends with the same curve (SPEC §6 resume).
     let back = trace.0.windows(2).position(|w| w[1].0 < w[0].0).unwrap() + 2;

@@ -93,6 +93,16 @@ pub enum StepFailure {
         /// d(quantity)/dλ at fixed equilibrium, dimensionless.
         slope: f64,
     },
+    /// The interface points held for a retried step did not come to
+    /// rest: held at the history their laws reach at the converged jumps,
+    /// the displacement is still out of balance after every pass.
+    #[error("{points} held interface points did not settle in {passes} passes (relative residual under their laws {relative_residual:e}). {regimes}")]
+    Unsettled {
+        points: usize,
+        passes: usize,
+        relative_residual: f64,
+        regimes: RegimeChanges,
+    },
     #[error("no convergence in {iterations} iterations (last relative residual {relative_residual:e}). {regimes}")]
     IterationLimit {
         iterations: usize,
@@ -108,6 +118,7 @@ impl StepFailure {
             StepFailure::Stagnating { regimes, .. }
             | StepFailure::Diverging { regimes, .. }
             | StepFailure::LinearSolve { regimes, .. }
+            | StepFailure::Unsettled { regimes, .. }
             | StepFailure::IterationLimit { regimes, .. } => Some(regimes),
             _ => None,
         }

@@ -15,7 +15,7 @@ use super::control::{Border, Control, Indirect};
 use super::failure::{RegimeChanges, StepFailure};
 use super::workspace::Workspace;
 use crate::assembly::{LoadDerivatives, States, Tangents};
-use crate::laws::TangentKind;
+use crate::laws::{InterfaceState, TangentKind};
 use crate::linalg::{dot, norm};
 use crate::spec::solver::{Forcing, SolverSettings};
 
@@ -34,6 +34,10 @@ pub(crate) struct Attempt {
     /// tets whose damage switched between growing and not at least twice
     /// between iterates (the points Newton could not settle).
     pub(crate) flipping: Vec<usize>,
+    /// Likewise the interface points whose regime switched at least twice:
+    /// damage growing or not, sliding or sticking, or their slip in the
+    /// step reversed its direction.
+    pub(crate) flipping_pairs: Vec<usize>,
 }
 
 impl Attempt {
@@ -44,6 +48,7 @@ impl Attempt {
             failure: None,
             force_only,
             flipping: Vec::new(),
+            flipping_pairs: Vec::new(),
         }
     }
     fn failed(iterations: usize, history: Vec<f64>, why: StepFailure) -> Self {
@@ -53,6 +58,7 @@ impl Attempt {
             failure: Some(why),
             force_only: false,
             flipping: Vec::new(),
+            flipping_pairs: Vec::new(),
         }
     }
 }
@@ -93,6 +99,36 @@ struct Record {
     /// often that changed between iterates.
     growing: Vec<bool>,
     flips: Vec<u8>,
+    /// Per interface point: its regime at the last iterate, and how often
+    /// that changed between iterates.
+    regimes: Vec<PairRegime>,
+    pair_flips: Vec<u8>,
+}
+
+/// What an interface point did in the step up to an iterate.
+#[derive(Clone, Copy, PartialEq)]
+struct PairRegime {
+    damage_grows: bool,
+    /// Its slip in the step (zero: sticking).
+    slip: [f64; 2],
+}
+
+impl PairRegime {
+    fn of(start: &InterfaceState, trial: &InterfaceState) -> Self {
+        Self {
+            damage_grows: trial.damage > start.damage,
+            slip: [trial.slip[0] - start.slip[0], trial.slip[1] - start.slip[1]],
+        }
+    }
+    /// Whether going from `self` to `next` switched damage growth, stick
+    /// and slip, or the direction of the slip.
+    fn switched(&self, next: &Self) -> bool {
+        let sliding = |r: &Self| r.slip != [0.0, 0.0];
+        let along = self.slip[0] * next.slip[0] + self.slip[1] * next.slip[1];
+        self.damage_grows != next.damage_grows
+            || sliding(self) != sliding(next)
+            || (sliding(self) && along < 0.0)
+    }
 }
 
 impl Record {
@@ -111,6 +147,8 @@ impl Record {
             best_lambda: control.lambda(),
             growing: Vec::new(),
             flips: Vec::new(),
+            regimes: Vec::new(),
+            pair_flips: Vec::new(),
         }
     }
     fn failed(mut self, iterations: usize, why: StepFailure) -> Attempt {
@@ -119,6 +157,7 @@ impl Record {
     fn failed_ref(&mut self, iterations: usize, why: StepFailure) -> Attempt {
         let mut attempt = Attempt::failed(iterations, std::mem::take(&mut self.history), why);
         attempt.flipping = self.flipping();
+        attempt.flipping_pairs = self.flipping_pairs();
         attempt
     }
     fn flipping(&self) -> Vec<usize> {
@@ -126,8 +165,32 @@ impl Record {
             .filter(|&i| self.flips[i] >= 2)
             .collect()
     }
-    /// Counts the tets whose damage growth changed since the last iterate.
+    fn flipping_pairs(&self) -> Vec<usize> {
+        (0..self.pair_flips.len())
+            .filter(|&i| self.pair_flips[i] >= 2)
+            .collect()
+    }
+    /// Counts the tets whose damage growth, and the interface points whose
+    /// regime, changed since the last iterate.
     fn track(&mut self, start: &States, trial: &States) {
+        let regime = |i: usize| PairRegime::of(&start.interface[i], &trial.interface[i]);
+        if self.regimes.is_empty() {
+            self.regimes = (0..trial.interface.len()).map(regime).collect();
+            self.pair_flips = vec![0; trial.interface.len()];
+        } else {
+            for (i, (r, f)) in self
+                .regimes
+                .iter_mut()
+                .zip(&mut self.pair_flips)
+                .enumerate()
+            {
+                let now = regime(i);
+                if r.switched(&now) {
+                    *f = f.saturating_add(1);
+                }
+                *r = now;
+            }
+        }
         let grows = |i: usize| trial.bulk[i].damage > start.bulk[i].damage;
         if self.growing.is_empty() {
             self.growing = (0..trial.bulk.len()).map(grows).collect();
@@ -303,6 +366,7 @@ impl Workspace<'_> {
             }
             let mut accepted = Attempt::converged(k, std::mem::take(&mut rec.history), true);
             accepted.flipping = rec.flipping();
+            accepted.flipping_pairs = rec.flipping_pairs();
             return Some(accepted);
         }
         if rec.kinds != Tangents::all(TangentKind::Secant) {

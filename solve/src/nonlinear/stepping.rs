@@ -18,7 +18,7 @@ use super::workspace::{reaction_norm, residual, LinearState, Workspace};
 use crate::assembly::{
     AssemblyError, ElementLaws, KeptBulkMatrix, LoadDerivatives, Outputs, States, System, Tangents,
 };
-use crate::laws::{BulkLaw, TangentKind};
+use crate::laws::{BulkLaw, HeldHistory, TangentKind};
 use crate::linalg::norm;
 use crate::spec::solver::{
     ConcreteIntegration, LinearSolverKind, Loading, PathFollowing, Predictor, SolverSettings,
@@ -51,8 +51,8 @@ const ELASTIC: f64 = 0.05;
 /// work.
 const STARTS_DISSIPATING: f64 = 1e-3;
 /// How often a step is retried with its flip-flopping tets made explicit
-/// before it is cut back.
-const RETRIES: usize = 2;
+/// or its flip-flopping interface points held before it is cut back.
+const RETRIES: usize = 3;
 /// Most damage passes of a retried step (`settle_explicit_damage`).
 const DAMAGE_PASSES: usize = 20;
 /// A retried tet's damage is settled when the implicit one exceeds the one
@@ -446,9 +446,12 @@ impl<'a> Driver<'a> {
         // Tets made explicit for this step after an attempt in which they
         // switched between damage growing and not (see `retry_explicit`).
         let mut flipped: Vec<usize> = Vec::new();
+        // Interface points held at a history for this step after an
+        // attempt in which their regime kept switching.
+        let mut held: Vec<(usize, HeldHistory)> = Vec::new();
         let mut retries = 0;
         let (attempt, u_trial, lambda) = loop {
-            self.prepare_start(&path, &plan, &flipped);
+            self.prepare_start(&path, &plan, &flipped, &held);
             let (mut u_trial, mut control) = Self::predict(
                 (&self.fed, &self.rates),
                 &self.problem,
@@ -467,15 +470,17 @@ impl<'a> Driver<'a> {
                 .ws
                 .newton(step_start, &mut u_trial, plan.size, &mut control);
             path.summary.total_iterations += attempt.iterations;
-            let chattered = attempt.force_only && !attempt.flipping.is_empty();
-            if attempt.failure.is_none() && (chattered || !flipped.is_empty()) {
+            let chattered = attempt.force_only
+                && !(attempt.flipping.is_empty() && attempt.flipping_pairs.is_empty());
+            let retried = !(flipped.is_empty() && held.is_empty());
+            if attempt.failure.is_none() && (chattered || retried) {
                 let start = self
                     .extrapolated
                     .get_or_insert_with(|| path.committed.clone());
                 attempt = settle_explicit_damage(
                     &mut self.ws,
                     start,
-                    &mut flipped,
+                    (&mut flipped, &mut held),
                     (&mut u_trial, plan.size, &mut control),
                     attempt,
                     &mut path.summary,
@@ -487,7 +492,17 @@ impl<'a> Driver<'a> {
                 flipped.extend(attempt.flipping.iter().filter(|&&i| !self.explicit[i]));
                 flipped.sort_unstable();
                 flipped.dedup();
-                if flipped.len() > before {
+                // Tets first: their retry settles monotonically. Interface
+                // points are held only when no new tet chattered (holding
+                // both at once turned retries that the tets alone settle
+                // into unsettled ones: docs/solver.md, "Law switches").
+                let mut more = flipped.len() > before;
+                if !more {
+                    let added = hold_pairs(&mut held, &attempt.flipping_pairs, &self.ws.trial);
+                    path.summary.held_interface_points += added;
+                    more = added > 0;
+                }
+                if more {
                     retries += 1;
                     path.summary.explicit_retries += 1;
                     self.ws.trial.clone_from(&path.committed);
@@ -570,10 +585,16 @@ impl<'a> Driver<'a> {
     /// The states a step starts from: the committed ones, with the damage
     /// of the explicit tets (and of `flipped`) extrapolated over the step;
     /// and the load derivatives' buffer under indirect control.
-    fn prepare_start(&mut self, path: &Path, plan: &Plan, flipped: &[usize]) {
+    fn prepare_start(
+        &mut self,
+        path: &Path,
+        plan: &Plan,
+        flipped: &[usize],
+        held: &[(usize, HeldHistory)],
+    ) {
         self.ws.load = (plan.mode != ControlMode::Displacement)
             .then(|| LoadDerivatives::new(self.ws.system.dofs().n_free()));
-        let any = !flipped.is_empty() || self.explicit.iter().any(|&e| e);
+        let any = !(flipped.is_empty() && held.is_empty()) || self.explicit.iter().any(|&e| e);
         match (any, self.extrapolated.is_some()) {
             (true, false) => self.extrapolated = Some(path.committed.clone()),
             (false, true) => self.extrapolated = None,
@@ -588,6 +609,9 @@ impl<'a> Driver<'a> {
                 .chain(flipped.iter().copied());
             for i in chosen {
                 ex.bulk[i] = laws[i].extrapolate(&ex.bulk[i], plan.scale);
+            }
+            for &(i, h) in held {
+                ex.interface[i].held = Some(h);
             }
         }
     }
@@ -621,17 +645,7 @@ impl<'a> Driver<'a> {
         std::mem::swap(&mut path.committed, &mut self.ws.trial);
         path.steel_yielding =
             RegimeChanges::between(&self.ws.trial, &path.committed).steel_yield > 0;
-        // A tet made explicit for this step only (a retry) goes back to the
-        // implicit integration, keeping the damage its stress used where
-        // that is the larger: the state then matches the equilibrium just
-        // found, and the energy it released stays dissipated.
-        for (s, &always) in path.committed.bulk.iter_mut().zip(&self.explicit) {
-            if !always {
-                if let Some(used) = s.explicit_damage.take() {
-                    s.damage = s.damage.max(used);
-                }
-            }
-        }
+        release_retried(&mut path.committed, &self.explicit);
         path.lambda = lambda;
         let (force, fed, bond) = self.problem.measurement.eval(&path.u, &self.ws.f_int);
         let row = CurveRow {
@@ -821,22 +835,31 @@ impl<'a> Driver<'a> {
         reason: &StepFailure,
     ) -> Option<Ending> {
         let last = path.rows.last()?;
+        let (damaging, concrete) = self.spreading_damage(reason)?;
+        let snapped_back = plan.mode == ControlMode::Energy && lambda < SNAP_BACK * path.lambda;
+        snapped_back.then_some(Ending::BrittleFailure {
+            force: last.force,
+            u_imposed: path.lambda,
+            snap_back_to: lambda,
+            damaging_concrete_tets: damaging,
+            concrete_tets: concrete,
+        })
+    }
+
+    /// Of a failed attempt whose last iterate grew concrete damage in at
+    /// least [`SPREADING`] of the concrete tets: those tets' count and the
+    /// concrete's.
+    fn spreading_damage(&self, reason: &StepFailure) -> Option<(usize, usize)> {
         let regimes = reason.regimes()?;
-        let model = self.problem.model;
-        let concrete = model
+        let concrete = self
+            .problem
+            .model
             .tet_region
             .iter()
             .filter(|r| **r == mesh::Region::Concrete)
             .count();
-        let snapped_back = plan.mode == ControlMode::Energy && lambda < SNAP_BACK * path.lambda;
-        let spreading = regimes.concrete_damage as f64 >= SPREADING * concrete as f64;
-        (snapped_back && spreading).then_some(Ending::BrittleFailure {
-            force: last.force,
-            u_imposed: path.lambda,
-            snap_back_to: lambda,
-            damaging_concrete_tets: regimes.concrete_damage,
-            concrete_tets: concrete,
-        })
+        (regimes.concrete_damage as f64 >= SPREADING * concrete as f64)
+            .then_some((regimes.concrete_damage, concrete))
     }
 
     /// The end of the run on the loaded member's yield plateau: the last
@@ -1011,17 +1034,25 @@ fn explicit_tets(model: &Model, settings: &SolverSettings) -> Vec<bool> {
 /// extrapolated damage of a tet passing its threshold lagged the implicit
 /// one by so much that committed states were out of balance by up to 95 %
 /// of the reaction (docs/solver.md, "Law switches: the explicit retry").
+/// The interface points held for the step (or that chattered in an
+/// attempt ending on its best iterate) are settled by the same passes: each
+/// pass holds them at the history their law reached at the converged jump,
+/// and the passes end once the displacement is in balance with that,
+/// where a held point's traction is its law's (`InterfaceLaw::held_step`).
+/// Their history need not grow monotonically; the passes are bounded by
+/// `DAMAGE_PASSES` all the same.
 /// Returns the last attempt: a failed pass fails the step; a step whose
 /// damage has not settled after `DAMAGE_PASSES` is kept, its residual
 /// under the implicit damage reported like IMPL-EX's.
 fn settle_explicit_damage(
     ws: &mut Workspace<'_>,
     start: &mut States,
-    flipped: &mut Vec<usize>,
+    (flipped, held): (&mut Vec<usize>, &mut Vec<(usize, HeldHistory)>),
     (u, step_size, control): (&mut [f64], f64, &mut Control<'_>),
     mut attempt: Attempt,
     summary: &mut Summary,
 ) -> Attempt {
+    let mut settled = false;
     for _ in 0..DAMAGE_PASSES {
         let mut changed = false;
         if attempt.force_only {
@@ -1043,7 +1074,17 @@ fn settle_explicit_damage(
                 changed = true;
             }
         }
+        if attempt.force_only {
+            let added = hold_pairs(held, &attempt.flipping_pairs, &ws.trial);
+            summary.held_interface_points += added;
+            changed |= added > 0;
+        }
+        // A held point takes the history its law reached at the converged
+        // jump; the balance check below then decides whether that moved
+        // the equilibrium.
+        changed |= rehold(held, start, &ws.trial);
         if !changed {
+            settled = true;
             break;
         }
         // Often the converged displacement is already in balance under the
@@ -1051,13 +1092,16 @@ fn settle_explicit_damage(
         // spares a Newton solve. An attempt that ended on its best iterate
         // has not met the energy criterion: it gets the solve.
         let balanced = if attempt.force_only {
-            Ok(false)
+            Ok((false, f64::INFINITY))
         } else {
             in_balance(ws, start, u, step_size, control)
         };
         match balanced {
-            Ok(true) => break,
-            Ok(false) => {}
+            Ok((true, _)) => {
+                settled = true;
+                break;
+            }
+            Ok((false, _)) => {}
             Err(source) => {
                 let why = StepFailure::Constitutive {
                     in_line_search: false,
@@ -1076,21 +1120,91 @@ fn settle_explicit_damage(
             break;
         }
     }
+    // Damage only grows, so unsettled tets leave a bounded residual, which
+    // is reported; held points can wander, so theirs fails the attempt.
+    if !settled && attempt.failure.is_none() && !held.is_empty() {
+        rehold(held, start, &ws.trial);
+        match in_balance(ws, start, u, step_size, control) {
+            Ok((true, _)) => {}
+            Ok((false, relative_residual)) => {
+                attempt.failure = Some(StepFailure::Unsettled {
+                    points: held.len(),
+                    passes: DAMAGE_PASSES,
+                    relative_residual,
+                    regimes: RegimeChanges::between(start, &ws.trial),
+                })
+            }
+            Err(source) => {
+                attempt.failure = Some(StepFailure::Constitutive {
+                    in_line_search: false,
+                    source,
+                })
+            }
+        }
+    }
     flipped.sort_unstable();
     flipped.dedup();
     attempt
 }
 
+/// Holds each held point at the history its law reached in `trial` (at
+/// the converged jump), in `held` and in `start`; whether any moved.
+fn rehold(held: &mut [(usize, HeldHistory)], start: &mut States, trial: &States) -> bool {
+    let mut moved = false;
+    for (i, h) in held.iter_mut() {
+        let implicit = HeldHistory::of(&trial.interface[*i]);
+        if implicit != *h {
+            *h = implicit;
+            moved = true;
+        }
+        start.interface[*i].held = Some(*h);
+    }
+    moved
+}
+
+/// Returns the points a retry treated apart to their laws. A tet made
+/// explicit for this step only goes back to the implicit integration,
+/// keeping the damage its stress used where that is the larger: the state
+/// then matches the equilibrium just found, and the energy it released
+/// stays dissipated. A held interface point likewise keeps the history its
+/// implicit update reached (the hold's, once settled).
+fn release_retried(committed: &mut States, explicit: &[bool]) {
+    for (s, &always) in committed.bulk.iter_mut().zip(explicit) {
+        if !always {
+            if let Some(used) = s.explicit_damage.take() {
+                s.damage = s.damage.max(used);
+            }
+        }
+    }
+    for s in &mut committed.interface {
+        if let Some(h) = s.held.take() {
+            s.damage = s.damage.max(h.damage);
+        }
+    }
+}
+
+/// Adds the interface points `flipping` not held yet to `held`, each held
+/// at the history of its last iterate in `trial`; returns how many.
+fn hold_pairs(held: &mut Vec<(usize, HeldHistory)>, flipping: &[usize], trial: &States) -> usize {
+    let before = held.len();
+    for &i in flipping {
+        if !held.iter().any(|&(j, _)| j == i) {
+            held.push((i, HeldHistory::of(&trial.interface[i])));
+        }
+    }
+    held.len() - before
+}
+
 /// Whether `u` meets the force criterion (and the control's constraint)
-/// from the start states `start`; leaves the trial states and internal
-/// forces of `u` in the workspace.
+/// from the start states `start`, and its relative residual; leaves the
+/// trial states and internal forces of `u` in the workspace.
 fn in_balance(
     ws: &mut Workspace<'_>,
     start: &States,
     u: &[f64],
     step_size: f64,
     control: &Control<'_>,
-) -> Result<bool, AssemblyError> {
+) -> Result<(bool, f64), AssemblyError> {
     let system: &System = ws.system;
     system.evaluate(
         ws.laws,
@@ -1112,7 +1226,8 @@ fn in_balance(
                 <= c.constraint.tolerance(tolerance, step_size)
         }
     };
-    Ok(held && norm(&r) <= tolerance * scale)
+    let relative = norm(&r) / scale;
+    Ok((held && relative <= tolerance, relative))
 }
 
 /// IMPL-EX error indicator of a converged step: the residual of the

@@ -74,9 +74,13 @@ pub struct Summary {
     #[serde(default)]
     pub explicit_retries: usize,
     /// Newton solves repeated after a retry to settle the damage of its
-    /// explicit tets.
+    /// explicit tets and the history of its held interface points.
     #[serde(default)]
     pub damage_passes: usize,
+    /// Interface points held at a history for a retried step (their
+    /// regime kept switching between Newton iterates), counted per step.
+    #[serde(default)]
+    pub held_interface_points: usize,
     /// The preconditioner GMRES used (`solver.preconditioner` resolved;
     /// `cholesky` for the direct and PCG linear solvers).
     #[serde(default)]
