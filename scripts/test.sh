@@ -3,7 +3,10 @@
 # fonts), then format, lint and every test of the workspace, real gmsh included.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+# Where the time goes (CI keeps under 20 minutes): each phase's end.
+phase() { echo "test: $1 done at ${SECONDS} s"; }
 bash scripts/setup.sh --no-build
+phase setup
 # The linear benchmark's test compares ribbar's reaction force with CalculiX.
 if ! command -v ccx >/dev/null 2>&1; then
   echo "test: installing calculix-ccx"
@@ -48,10 +51,13 @@ cargo fmt --all --check
 # Structure rules of the library crates (docs/architecture.md).
 python3 scripts/check-structure.py
 cargo clippy --workspace --all-targets --quiet -- -D warnings
+phase lint
 # The test build hides the rest of the snakemake install.
 cargo test --workspace --no-run
+phase "test build"
 wait_for "$snakemake_pid" snakemake
 cargo test --workspace
+phase tests
 # The Python package: its wheel (built with the test profile, whose
 # artifacts the tests above already compiled), installed with its
 # dependencies (the PyPI gmsh among them) into a fresh virtual environment,
@@ -63,3 +69,4 @@ rm -rf target/wheels-test .tools/python-test-venv
 python3 -m venv .tools/python-test-venv
 .tools/python-test-venv/bin/pip install -q --disable-pip-version-check target/wheels-test/ribbar-*.whl "pytest>=7"
 env -u GMSH .tools/python-test-venv/bin/python -m pytest -q python/tests
+phase "python package"
