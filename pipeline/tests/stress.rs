@@ -149,9 +149,10 @@ fn threshold_two_cycles_are_settled_by_an_explicit_retry() {
 /// The small ribbed specimen with a stiff interface (λ_0 = 5e-6 m, the
 /// stress sweep's case 21) to 0.3 mm, as its half-turn half: on its
 /// 31 MPa plateau a dozen interface points switch between sliding and
-/// sticking, or reverse their slip, at every Newton iterate. Retried with
-/// those points held at a history and settled, the run reaches its end on
-/// the stated criteria with its energy balance intact.
+/// sticking, or reverse their slip, at every Newton iterate, and the run
+/// stops there by default. Retried with those points held at a history
+/// and settled (`solver.interface_holds`), it reaches its end on the
+/// stated criteria with its energy balance intact.
 #[test]
 fn stick_slip_switches_are_settled_by_holding_the_points() {
     let work = std::env::temp_dir().join(format!("ribbar-hold-{}", std::process::id()));
@@ -163,6 +164,8 @@ fn stick_slip_switches_are_settled_by_holding_the_points() {
             "materials.interface.lambda0=5e-6 m",
             "--set",
             "loading.u_final=0.3 mm",
+            "--set",
+            "solver.interface_holds=true",
         ],
     );
     assert_settled_to_the_end(&out, &solve, "held_interface_points");

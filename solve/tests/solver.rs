@@ -1463,7 +1463,8 @@ impl Observer for Trace {
 /// back, displacement control finds no equilibrium past the peak and
 /// stops; dissipation control follows the path back in the imposed
 /// displacement and on to the end (SPEC §6 path-following), from the
-/// start (`energy`) or from where displacement control stops (`auto`).
+/// start (`energy`) or from where displacement control stops (`auto`,
+/// with `interface_holds`).
 #[test]
 fn dissipation_control_follows_a_snap_back() {
     let (m, laws, loading) = snap_back_case();
@@ -1493,17 +1494,15 @@ fn dissipation_control_follows_a_snap_back() {
         "{:?}",
         res.ending
     );
-    // The default, `auto`, hands over where displacement control stops
-    // and also follows the path to its end.
+    // `auto` (the default) with the interface points held for retries
+    // hands over where displacement control stops and follows the path to
+    // its end (without the holds it stalls at the peak here).
+    let auto_held = SolverSettings {
+        interface_holds: true,
+        ..SolverSettings::default()
+    };
     let mut atrace = Trace(Vec::new());
-    let auto = solve_pullout(
-        &m,
-        &laws,
-        &loading,
-        &SolverSettings::default(),
-        None,
-        &mut atrace,
-    );
+    let auto = solve_pullout(&m, &laws, &loading, &auto_held, None, &mut atrace);
     assert!(
         matches!(
             auto.as_ref().map(|r| &r.ending),

@@ -51,8 +51,11 @@ const ELASTIC: f64 = 0.05;
 /// work.
 const STARTS_DISSIPATING: f64 = 1e-3;
 /// How often a step is retried with its flip-flopping tets made explicit
-/// or its flip-flopping interface points held before it is cut back.
-const RETRIES: usize = 3;
+/// before it is cut back ...
+const RETRIES: usize = 2;
+/// ... and with its flip-flopping interface points held too
+/// (`solver.interface_holds`).
+const RETRIES_WITH_HOLDS: usize = 3;
 /// Most damage passes of a retried step (`settle_explicit_damage`).
 const DAMAGE_PASSES: usize = 20;
 /// A retried tet's damage is settled when the implicit one exceeds the one
@@ -470,6 +473,9 @@ impl<'a> Driver<'a> {
                 .ws
                 .newton(step_start, &mut u_trial, plan.size, &mut control);
             path.summary.total_iterations += attempt.iterations;
+            if !self.settings.interface_holds {
+                attempt.flipping_pairs.clear();
+            }
             let chattered = attempt.force_only
                 && !(attempt.flipping.is_empty() && attempt.flipping_pairs.is_empty());
             let retried = !(flipped.is_empty() && held.is_empty());
@@ -487,7 +493,15 @@ impl<'a> Driver<'a> {
                 );
             }
             let lambda = control.lambda().unwrap_or(plan.target);
-            if attempt.failure.is_some() && retries < RETRIES {
+            if !self.settings.interface_holds {
+                attempt.flipping_pairs.clear();
+            }
+            let most = if self.settings.interface_holds {
+                RETRIES_WITH_HOLDS
+            } else {
+                RETRIES
+            };
+            if attempt.failure.is_some() && retries < most {
                 let before = flipped.len();
                 flipped.extend(attempt.flipping.iter().filter(|&&i| !self.explicit[i]));
                 flipped.sort_unstable();
@@ -1074,7 +1088,7 @@ fn settle_explicit_damage(
                 changed = true;
             }
         }
-        if attempt.force_only {
+        if attempt.force_only && ws.settings.interface_holds {
             let added = hold_pairs(held, &attempt.flipping_pairs, &ws.trial);
             summary.held_interface_points += added;
             changed |= added > 0;
