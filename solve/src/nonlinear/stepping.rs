@@ -51,7 +51,7 @@ const ELASTIC: f64 = 0.05;
 /// work.
 const STARTS_DISSIPATING: f64 = 1e-3;
 /// How often a step is retried with its flip-flopping tets made explicit
-/// before it is cut back ...
+/// before it is cut back, without interface holds ...
 const RETRIES: usize = 2;
 /// ... and with its flip-flopping interface points held too
 /// (`solver.interface_holds`).
@@ -1176,7 +1176,7 @@ fn rehold(held: &mut [(usize, HeldHistory)], start: &mut States, trial: &States)
     moved
 }
 
-/// Returns the points a retry treated apart to their laws. A tet made
+/// Hands the points a retry treated apart back to their laws. A tet made
 /// explicit for this step only goes back to the implicit integration,
 /// keeping the damage its stress used where that is the larger: the state
 /// then matches the equilibrium just found, and the energy it released
