@@ -100,7 +100,9 @@ struct Record {
     growing: Vec<bool>,
     flips: Vec<u8>,
     /// Per interface point: its regime at the last iterate, and how often
-    /// that changed between iterates.
+    /// that changed between iterates; tracked only when the solver may
+    /// hold such points (`solver.interface_holds`).
+    holds_pairs: bool,
     regimes: Vec<PairRegime>,
     pair_flips: Vec<u8>,
 }
@@ -147,6 +149,7 @@ impl Record {
             best_lambda: control.lambda(),
             growing: Vec::new(),
             flips: Vec::new(),
+            holds_pairs: settings.interface_holds,
             regimes: Vec::new(),
             pair_flips: Vec::new(),
         }
@@ -170,26 +173,33 @@ impl Record {
             .filter(|&i| self.pair_flips[i] >= 2)
             .collect()
     }
-    /// Counts the tets whose damage growth, and the interface points whose
-    /// regime, changed since the last iterate.
-    fn track(&mut self, start: &States, trial: &States) {
+    /// Counts the interface points whose regime changed since the last
+    /// iterate.
+    fn track_pairs(&mut self, start: &States, trial: &States) {
         let regime = |i: usize| PairRegime::of(&start.interface[i], &trial.interface[i]);
         if self.regimes.is_empty() {
             self.regimes = (0..trial.interface.len()).map(regime).collect();
             self.pair_flips = vec![0; trial.interface.len()];
-        } else {
-            for (i, (r, f)) in self
-                .regimes
-                .iter_mut()
-                .zip(&mut self.pair_flips)
-                .enumerate()
-            {
-                let now = regime(i);
-                if r.switched(&now) {
-                    *f = f.saturating_add(1);
-                }
-                *r = now;
+            return;
+        }
+        for (i, (r, f)) in self
+            .regimes
+            .iter_mut()
+            .zip(&mut self.pair_flips)
+            .enumerate()
+        {
+            let now = regime(i);
+            if r.switched(&now) {
+                *f = f.saturating_add(1);
             }
+            *r = now;
+        }
+    }
+    /// Counts the tets whose damage growth, and (when tracked) the
+    /// interface points whose regime, changed since the last iterate.
+    fn track(&mut self, start: &States, trial: &States) {
+        if self.holds_pairs {
+            self.track_pairs(start, trial);
         }
         let grows = |i: usize| trial.bulk[i].damage > start.bulk[i].damage;
         if self.growing.is_empty() {

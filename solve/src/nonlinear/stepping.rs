@@ -473,9 +473,6 @@ impl<'a> Driver<'a> {
                 .ws
                 .newton(step_start, &mut u_trial, plan.size, &mut control);
             path.summary.total_iterations += attempt.iterations;
-            if !self.settings.interface_holds {
-                attempt.flipping_pairs.clear();
-            }
             let chattered = attempt.force_only
                 && !(attempt.flipping.is_empty() && attempt.flipping_pairs.is_empty());
             let retried = !(flipped.is_empty() && held.is_empty());
@@ -493,9 +490,6 @@ impl<'a> Driver<'a> {
                 );
             }
             let lambda = control.lambda().unwrap_or(plan.target);
-            if !self.settings.interface_holds {
-                attempt.flipping_pairs.clear();
-            }
             let most = if self.settings.interface_holds {
                 RETRIES_WITH_HOLDS
             } else {
@@ -1088,7 +1082,7 @@ fn settle_explicit_damage(
                 changed = true;
             }
         }
-        if attempt.force_only && ws.settings.interface_holds {
+        if attempt.force_only {
             let added = hold_pairs(held, &attempt.flipping_pairs, &ws.trial);
             summary.held_interface_points += added;
             changed |= added > 0;
