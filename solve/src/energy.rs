@@ -198,6 +198,19 @@ impl<'a> EnergyTracker<'a> {
         Ok(tracker)
     }
 
+    /// Continues after the converged state `start` instead (a run that
+    /// went back to an earlier step): its rows replace the tracker's.
+    pub fn rewind(&mut self, start: EnergyStart<'_>) -> Result<(), EnergyError> {
+        self.check_sizes(start.u, start.states)?;
+        self.u_old = start.u.to_vec();
+        self.lambda_old = start.lambda;
+        self.force_old = start.force;
+        self.rows = start.rows;
+        let u_copy = start.u.to_vec();
+        self.sweep(&u_copy, start.states)?;
+        Ok(())
+    }
+
     fn check_sizes(&self, u: &[f64], states: &States) -> Result<(), EnergyError> {
         let size = |what, found, expected| {
             if found == expected {
@@ -641,6 +654,94 @@ mod tests {
         let chk = check(tracker.rows(), ENERGY_TOLERANCE);
         assert!(chk.passed, "{chk:?}");
         assert!(chk.min_dissipation_increment >= -1e-12);
+    }
+
+    /// A tracker sent back to an earlier converged state (a run that
+    /// discards steps after a stall) continues as one that never left it:
+    /// the detour leaves nothing in its sums.
+    #[test]
+    fn energy_tracker_rewound_equals_resumed() {
+        let mut model = Model {
+            nodes: vec![[0.0; 3]; 6],
+            node_region: vec![Region::Steel; 3]
+                .into_iter()
+                .chain(vec![Region::Concrete; 3])
+                .collect(),
+            interfaces: vec![InterfaceElement {
+                nodes: [0, 1, 2, 3, 4, 5],
+                zone: InterfaceZone::Adhesive,
+                frame: Frame {
+                    n: [1.0, 0.0, 0.0],
+                    t: [0.0, 0.0, 1.0],
+                    h: [0.0, -1.0, 0.0],
+                },
+                area: 2e-6,
+            }],
+            ..Default::default()
+        };
+        model.symmetry = mesh::Symmetry::Full;
+        let law = fczm();
+        let laws = ElementLaws {
+            tets: Vec::new(),
+            interfaces: vec![Some(law.into())],
+        };
+        // The state at opening `lam` from `states`: displacement, states, force.
+        let at = |lam: f64, states: &States| {
+            let mut u = vec![0.0; 18];
+            for p in 3..6 {
+                u[3 * p] = lam;
+            }
+            let r = law
+                .step(
+                    &states.interface[0],
+                    &Vector3::new(lam, 0.0, 0.0),
+                    TangentKind::Secant,
+                )
+                .unwrap();
+            let mut next = states.clone();
+            next.interface.iter_mut().for_each(|st| *st = r.state);
+            (u, next, r.traction[0] * 2e-6)
+        };
+        let path = |k: usize| 4e-4 * k as f64 / 400.0;
+        let (mut straight, mut sent_back) = (
+            EnergyTracker::new(&model, &laws).unwrap(),
+            EnergyTracker::new(&model, &laws).unwrap(),
+        );
+        let mut states = States::initial(&model);
+        let mut kept = None;
+        for k in 1..=100 {
+            let (u, next, f) = at(path(k), &states);
+            straight.step(path(k), f, &u, &next).unwrap();
+            sent_back.step(path(k), f, &u, &next).unwrap();
+            states = next;
+            kept = Some((u, states.clone(), f));
+        }
+        // A detour the run then discards: further open, then back.
+        let mut detour = states.clone();
+        for lam in [2e-4, 3e-4, 1e-4] {
+            let (u, next, f) = at(lam, &detour);
+            sent_back.step(lam, f, &u, &next).unwrap();
+            detour = next;
+        }
+        let (u, kept_states, force) = kept.unwrap();
+        let rows = straight.rows().to_vec();
+        sent_back
+            .rewind(EnergyStart {
+                u: &u,
+                states: &kept_states,
+                rows,
+                lambda: path(100),
+                force,
+            })
+            .unwrap();
+        for k in 101..=400 {
+            let (u, next, f) = at(path(k), &states);
+            straight.step(path(k), f, &u, &next).unwrap();
+            sent_back.step(path(k), f, &u, &next).unwrap();
+            states = next;
+        }
+        assert_eq!(straight.rows(), sent_back.rows());
+        assert!(check(sent_back.rows(), ENERGY_TOLERANCE).passed);
     }
 
     /// The check flags an imbalance above the tolerance and a dissipation

@@ -18,7 +18,9 @@ use solve::nonlinear::{
     StepFailure, StepReport,
 };
 use solve::problems::pullout::solve_pullout;
-use solve::spec::solver::{Forcing, LinearSolverKind, Loading, PathFollowing, SolverSettings};
+use solve::spec::solver::{
+    Forcing, InterfaceHolds, LinearSolverKind, Loading, PathFollowing, SolverSettings,
+};
 
 /// A structured block of hexahedra, each split into 6 positive tets.
 /// Returns (first node index, node index grid accessor dims).
@@ -1494,11 +1496,13 @@ fn dissipation_control_follows_a_snap_back() {
         "{:?}",
         res.ending
     );
-    // `auto` (the default) with the interface points held for retries
-    // hands over where displacement control stops and follows the path to
-    // its end (without the holds it stalls at the peak here).
+    // `auto` (the default) hands over where displacement control stops
+    // and, with the interface points held for retries from the start
+    // (`always`), follows the path to its end; without the holds it
+    // stalls at the peak here. (`on_stall` goes back to step 7 and
+    // stalls again: held only from there, 24 points do not settle.)
     let auto_held = SolverSettings {
-        interface_holds: true,
+        interface_holds: InterfaceHolds::Always,
         ..SolverSettings::default()
     };
     let mut atrace = Trace(Vec::new());
@@ -1512,6 +1516,12 @@ fn dissipation_control_follows_a_snap_back() {
         auto.map(|r| r.ending)
     );
     assert!(atrace.0.windows(2).any(|w| w[1].0 < w[0].0 - 1e-12));
+    let unheld = SolverSettings {
+        interface_holds: InterfaceHolds::Off,
+        ..SolverSettings::default()
+    };
+    let auto = solve_pullout(&m, &laws, &loading, &unheld, None, &mut Silent);
+    assert!(matches!(auto, Err(SolveError::Stalled { .. })));
     // A run resumed from a checkpoint taken under dissipation control, on
     // the way back in λ, ends with the same curve (SPEC §6 resume).
     let back = trace.0.windows(2).position(|w| w[1].0 < w[0].0).unwrap() + 2;

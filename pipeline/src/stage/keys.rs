@@ -15,7 +15,7 @@ impl Stage {
         match self {
             Stage::Geometry => 3,
             Stage::Mesh => 2,
-            Stage::Solve => 11,
+            Stage::Solve => 12,
             Stage::Post => 2,
         }
     }

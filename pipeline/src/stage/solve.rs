@@ -102,6 +102,27 @@ impl StageObserver<'_> {
         Ok(())
     }
 
+    /// Writes the checkpoint of the converged state `view`, the peak's
+    /// fields first: a resumed run never rewrites a peak it has already
+    /// passed.
+    fn save_checkpoint(&mut self, view: &CommittedView<'_>) -> Result<()> {
+        self.write_pending_peak(view.model)?;
+        let started = Instant::now();
+        let mut checkpoint = (view.checkpoint)();
+        checkpoint.record = ObserverRecord {
+            energy: self
+                .energy
+                .as_ref()
+                .map_or_else(|_| Vec::new(), |t| t.rows().to_vec()),
+            profile: self.profile.clone(),
+            peak_profile: self.peak_profile.clone(),
+        };
+        checkpoint.save(&self.checkpoint_path)?;
+        self.checkpoint_cost = started.elapsed();
+        self.last_checkpoint = Instant::now();
+        Ok(())
+    }
+
     /// Writes the kept peak state's fields, if one is waiting.
     fn write_pending_peak(&mut self, model: &Model) -> Result<()> {
         match self.pending_peak.take() {
@@ -175,27 +196,66 @@ impl Observer for StageObserver<'_> {
         if result.is_ok()
             && self.last_checkpoint.elapsed() >= self.checkpoint_cost * CHECKPOINT_COST_RATIO
         {
-            // The checkpoint's run has its peak fields on disk: a resumed
-            // run never rewrites a peak it has already passed.
-            result = self.write_pending_peak(view.model);
-            if result.is_ok() {
-                let started = Instant::now();
-                let mut checkpoint = (view.checkpoint)();
-                checkpoint.record = ObserverRecord {
-                    energy: self
-                        .energy
-                        .as_ref()
-                        .map_or_else(|_| Vec::new(), |t| t.rows().to_vec()),
-                    profile: self.profile.clone(),
-                    peak_profile: self.peak_profile.clone(),
-                };
-                result = checkpoint.save(&self.checkpoint_path).map_err(Into::into);
-                self.checkpoint_cost = started.elapsed();
-                self.last_checkpoint = Instant::now();
-            }
+            result = self.save_checkpoint(view);
         }
         if let Err(e) = result {
             self.error = Some(e);
+        }
+    }
+
+    fn rewound(&mut self, stalled: usize, view: &CommittedView<'_>) {
+        let checkpoint = (view.checkpoint)();
+        let kept = &checkpoint.rows;
+        self.ctx.printer.line(&format!(
+            "solve: step {stalled} stalled; going back to step {} (u = {:.4} mm), from where \
+             interface points that chatter may be held (solver.interface_holds: on_stall)",
+            kept.len(),
+            checkpoint.u_imposed * 1e3
+        ));
+        if let Ok(tracker) = &mut self.energy {
+            let mut rows = tracker.rows().to_vec();
+            rows.truncate(kept.len());
+            let start = EnergyStart {
+                u: view.u,
+                states: view.states,
+                rows,
+                lambda: checkpoint.u_imposed,
+                force: kept.last().map_or(0.0, |r| r.force),
+            };
+            if let Err(e) = tracker.rewind(start) {
+                self.energy = Err(format!("going back to step {}: {e}", kept.len()));
+            }
+        }
+        let discarded = |step: usize| step > kept.len();
+        self.profile.retain(|r| !discarded(r.step));
+        let peak_discarded = self
+            .pending_peak
+            .as_ref()
+            .is_some_and(|p| discarded(p.row.step))
+            || self.peak_profile.first().is_some_and(|r| discarded(r.step));
+        if peak_discarded {
+            // The peak so far was a discarded step's: the kept steps' own
+            // maximum is waiting again if it is the last kept step (a
+            // rising curve), else the next higher step takes its place.
+            self.pending_peak = None;
+            self.peak_profile.clear();
+            self.peak_passed = false;
+            self.peak = kept.iter().map(|r| r.bond_stress).fold(0.0, f64::max);
+            if let Some(last) = kept.last().filter(|r| r.bond_stress >= self.peak) {
+                if self.ctx.scene.outputs.fields.at_peak {
+                    self.pending_peak = Some(PeakState {
+                        row: *last,
+                        u: view.u.to_vec(),
+                        states: view.states.clone(),
+                    });
+                }
+            }
+        }
+        // A resume from here must not find a checkpoint of a discarded step.
+        if self.error.is_none() {
+            if let Err(e) = self.save_checkpoint(view) {
+                self.error = Some(e);
+            }
         }
     }
 

@@ -100,8 +100,8 @@ struct Record {
     growing: Vec<bool>,
     flips: Vec<u8>,
     /// Per interface point: its regime at the last iterate, and how often
-    /// that changed between iterates; tracked only when the solver may
-    /// hold such points (`solver.interface_holds`).
+    /// that changed between iterates; tracked only when the step may
+    /// hold such points (`Workspace::holds_pairs`).
     holds_pairs: bool,
     regimes: Vec<PairRegime>,
     pair_flips: Vec<u8>,
@@ -134,7 +134,7 @@ impl PairRegime {
 }
 
 impl Record {
-    fn new(settings: &SolverSettings, u: &[f64], control: &Control<'_>) -> Self {
+    fn new(settings: &SolverSettings, holds_pairs: bool, u: &[f64], control: &Control<'_>) -> Self {
         Self {
             history: Vec::new(),
             energy_ref: 0.0,
@@ -149,7 +149,7 @@ impl Record {
             best_lambda: control.lambda(),
             growing: Vec::new(),
             flips: Vec::new(),
-            holds_pairs: settings.interface_holds,
+            holds_pairs,
             regimes: Vec::new(),
             pair_flips: Vec::new(),
         }
@@ -233,7 +233,7 @@ impl Workspace<'_> {
         let settings = self.settings;
         let dofs = self.system.dofs();
         let n_free = dofs.n_free();
-        let mut rec = Record::new(settings, u, control);
+        let mut rec = Record::new(settings, self.holds_pairs, u, control);
         let mut r = vec![0.0; n_free];
         let mut du = vec![0.0; n_free];
         // Correction of the previous iteration (for the line search).

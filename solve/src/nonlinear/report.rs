@@ -68,6 +68,10 @@ pub struct CommittedView<'a> {
 pub trait Observer {
     fn step_converged(&mut self, _report: &StepReport, _state: &CommittedView<'_>) {}
     fn cutback(&mut self, _event: &Cutback) {}
+    /// The run went back to the converged state `state` after step
+    /// `stalled` stalled (`solver.interface_holds: on_stall`): the steps
+    /// after the state's are discarded and will be reported again.
+    fn rewound(&mut self, _stalled: usize, _state: &CommittedView<'_>) {}
 }
 
 /// An observer that ignores everything.

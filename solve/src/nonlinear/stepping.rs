@@ -21,7 +21,8 @@ use crate::assembly::{
 use crate::laws::{BulkLaw, HeldHistory, TangentKind};
 use crate::linalg::norm;
 use crate::spec::solver::{
-    ConcreteIntegration, LinearSolverKind, Loading, PathFollowing, Predictor, SolverSettings,
+    ConcreteIntegration, InterfaceHolds, LinearSolverKind, Loading, PathFollowing, Predictor,
+    SolverSettings,
 };
 use mesh::Model;
 use std::time::Instant;
@@ -77,6 +78,7 @@ const SNAP_BACK: f64 = 0.5;
 const SPREADING: f64 = 0.01;
 
 /// The converged state of a run between steps.
+#[derive(Clone)]
 struct Path {
     /// Global displacement, m.
     u: Vec<f64>,
@@ -138,6 +140,10 @@ struct Driver<'a> {
     /// The committed states with the extrapolated damage of the explicit
     /// tets for the step being attempted; `None` when there are none.
     extrapolated: Option<States>,
+    /// Under `solver.interface_holds: on_stall`, before the holds: the
+    /// path before the first cut-back since the last easy step, which a
+    /// stall goes back to.
+    rewind: Option<Path>,
     /// Wall times of this invocation, and of the run before a resume.
     wall: WallTimes,
     previous_wall: WallTimes,
@@ -259,6 +265,7 @@ impl<'a> Driver<'a> {
             lin,
             force_floor: 0.0,
             wall: WallTimes::default(),
+            holds_pairs: false,
         };
         Ok(Self {
             rates: problem.dirichlet.load_rates(),
@@ -273,6 +280,7 @@ impl<'a> Driver<'a> {
             ws,
             explicit: explicit_tets(problem.model, settings),
             extrapolated: None,
+            rewind: None,
             wall,
             previous_wall: WallTimes::default(),
             started,
@@ -453,6 +461,7 @@ impl<'a> Driver<'a> {
         // attempt in which their regime kept switching.
         let mut held: Vec<(usize, HeldHistory)> = Vec::new();
         let mut retries = 0;
+        self.ws.holds_pairs = self.holds_pairs(&path);
         let (attempt, u_trial, lambda) = loop {
             self.prepare_start(&path, &plan, &flipped, &held);
             let (mut u_trial, mut control) = Self::predict(
@@ -490,7 +499,7 @@ impl<'a> Driver<'a> {
                 );
             }
             let lambda = control.lambda().unwrap_or(plan.target);
-            let most = if self.settings.interface_holds {
+            let most = if self.ws.holds_pairs {
                 RETRIES_WITH_HOLDS
             } else {
                 RETRIES
@@ -676,6 +685,7 @@ impl<'a> Driver<'a> {
             // A displacement-controlled last step of an indirect run: the
             // next one (if any) keeps the run's mode and size.
         } else if attempt.iterations <= loading.easy_iterations {
+            self.rewind = None;
             path.next_step = (plan.size * loading.growth)
                 .min(loading.max_step)
                 .max(path.next_step);
@@ -747,6 +757,12 @@ impl<'a> Driver<'a> {
         observer: &mut dyn Observer,
     ) -> Result<Outcome, SolveError> {
         let loading = self.loading;
+        if self.rewind.is_none()
+            && self.settings.interface_holds == InterfaceHolds::OnStall
+            && path.summary.interface_holds_from_step.is_none()
+        {
+            self.rewind = Some(path.clone());
+        }
         let reason = attempt.failure.expect("a failed attempt");
         path.summary.cutbacks += 1;
         let next = plan.size * loading.cutback;
@@ -796,6 +812,9 @@ impl<'a> Driver<'a> {
             if let Some(failure) = self.brittle_failure(&path, plan, lambda, &reason) {
                 return Ok(Outcome::End(failure, path));
             }
+            if let Some(back) = self.rewind.take() {
+                return Ok(Outcome::Continue(self.go_back(back, &path, observer)));
+            }
             return Err(SolveError::Stalled {
                 step,
                 u_imposed: lambda,
@@ -810,6 +829,46 @@ impl<'a> Driver<'a> {
             path.next_step = next.max(min_step);
         }
         Ok(Outcome::Continue(path))
+    }
+
+    /// The path `back` from before the cut-backs that led to the stall of
+    /// `stalled`, from where every step may hold interface points. Holding
+    /// them in the stalled state itself does not help: its last steps
+    /// ended at the residual tolerance, so even a nanometre step starts
+    /// out of balance (docs/solver.md, "Law switches"). The effort spent
+    /// since is kept in the counters.
+    fn go_back(&mut self, mut back: Path, stalled: &Path, observer: &mut dyn Observer) -> Path {
+        let (now, then) = (&stalled.summary, &mut back.summary);
+        then.total_iterations = now.total_iterations;
+        then.cutbacks = now.cutbacks;
+        then.explicit_retries = now.explicit_retries;
+        then.damage_passes = now.damage_passes;
+        then.held_interface_points = now.held_interface_points;
+        then.interface_holds_from_step = Some(back.rows.len() + 1);
+        self.ws.trial.clone_from(&back.committed);
+        let h = back.next_step;
+        let cp = || self.checkpoint(&back, h);
+        observer.rewound(
+            stalled.rows.len() + 1,
+            &CommittedView {
+                model: self.problem.model,
+                laws: self.problem.laws,
+                checkpoint: &cp,
+                u: &back.u,
+                states: &back.committed,
+            },
+        );
+        back
+    }
+
+    /// Whether the next step may hold interface points
+    /// (`solver.interface_holds`).
+    fn holds_pairs(&self, path: &Path) -> bool {
+        match self.settings.interface_holds {
+            InterfaceHolds::Off => false,
+            InterfaceHolds::OnStall => path.summary.interface_holds_from_step.is_some(),
+            InterfaceHolds::Always => true,
+        }
     }
 
     /// The end of the run at the loaded member's limit load: the step

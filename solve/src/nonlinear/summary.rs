@@ -81,6 +81,12 @@ pub struct Summary {
     /// regime kept switching between Newton iterates), counted per step.
     #[serde(default)]
     pub held_interface_points: usize,
+    /// The step from which interface points may be held, under
+    /// `solver.interface_holds: on_stall`: the first that would have
+    /// stalled at its minimum size without them. (Always serialised: the
+    /// checkpoint's encoding is not self-describing.)
+    #[serde(default)]
+    pub interface_holds_from_step: Option<usize>,
     /// The preconditioner GMRES used (`solver.preconditioner` resolved;
     /// `cholesky` for the direct and PCG linear solvers).
     #[serde(default)]

@@ -46,6 +46,9 @@ pub(crate) struct Workspace<'a> {
     pub(crate) force_floor: f64,
     /// Wall times of the step being attempted.
     pub(crate) wall: WallTimes,
+    /// Whether the step being attempted may hold interface points, so
+    /// Newton counts their regime switches (`solver.interface_holds`).
+    pub(crate) holds_pairs: bool,
 }
 
 impl Workspace<'_> {

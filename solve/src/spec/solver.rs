@@ -201,7 +201,7 @@ pub struct RawSolver {
     pub impl_ex_tolerance: Option<f64>,
     pub path_following: Option<PathFollowing>,
     pub sliver_quality: Option<f64>,
-    pub interface_holds: Option<bool>,
+    pub interface_holds: Option<InterfaceHolds>,
     pub preconditioner: Option<PreconditionerKind>,
 }
 
@@ -297,6 +297,25 @@ pub enum PathFollowing {
     Auto,
 }
 
+/// When the solver holds the interface points whose regime keeps
+/// switching between Newton iterates (docs/solver.md, "Law switches").
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum InterfaceHolds {
+    /// Never: a step whose interface chatters is cut back, and stalls at
+    /// the minimum step.
+    Off,
+    /// From the first step that would otherwise stall at its minimum
+    /// size to the end of the run. Every run that gets through without
+    /// them keeps its curve: holding the points in every step carries the
+    /// stress sweep's stiff-interface case 21 to its end but moves
+    /// splitting cubes onto other branches, where they stall.
+    #[default]
+    OnStall,
+    /// In the retries of every step.
+    Always,
+}
+
 /// First iterate of a load step.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default)]
 #[serde(rename_all = "snake_case")]
@@ -373,20 +392,21 @@ pub struct SolverSettings {
     /// "Law switches"). 0 disables; left out of the serialised form then.
     #[serde(default, skip_serializing_if = "is_zero")]
     pub sliver_quality: f64,
-    /// Interface points whose regime (stick/slip, slip direction, damage
-    /// growth) keeps switching between Newton iterates are held at a
-    /// history for a retry of the step and then settled (after the tets'
-    /// explicit retry). Off by default: it carries the stress sweep's
-    /// stiff-interface case 21 to its end but moves splitting cubes onto
-    /// other branches, where the sweep's case 48 and the whole-specimen
-    /// split of the on-demand suite stop (docs/solver.md, "Law switches").
-    /// Left out of the serialised form when off.
-    #[serde(default, skip_serializing_if = "is_false")]
-    pub interface_holds: bool,
+    /// When the interface points whose regime (stick/slip, slip
+    /// direction, damage growth) keeps switching between Newton iterates
+    /// are held at a history for a retry of the step and then settled
+    /// (after the tets' explicit retry). Left out of the serialised form at
+    /// its default.
+    #[serde(default, skip_serializing_if = "is_on_stall")]
+    pub interface_holds: InterfaceHolds,
     /// The GMRES preconditioner (`linear_solver: gmres` only). Left out of
     /// the serialised form at its default.
     #[serde(default, skip_serializing_if = "is_auto_preconditioner")]
     pub preconditioner: PreconditionerKind,
+}
+
+fn is_on_stall(h: &InterfaceHolds) -> bool {
+    *h == InterfaceHolds::OnStall
 }
 
 fn is_auto_preconditioner(p: &PreconditionerKind) -> bool {
@@ -429,10 +449,6 @@ fn in_unit_interval(key: &str, v: f64) -> Result<f64, SolverSpecError> {
             bound: "must be in [0, 1)",
         })
     }
-}
-
-fn is_false(v: &bool) -> bool {
-    !*v
 }
 
 fn is_zero(v: &f64) -> bool {
@@ -480,7 +496,7 @@ impl Default for SolverSettings {
             impl_ex_tolerance: DEFAULT_IMPL_EX_TOLERANCE,
             path_following: PathFollowing::Auto,
             sliver_quality: 0.0,
-            interface_holds: false,
+            interface_holds: InterfaceHolds::OnStall,
             preconditioner: PreconditionerKind::Auto,
         }
     }
