@@ -86,7 +86,50 @@ pub struct MeshReport {
     pub algorithm_3d: Option<crate::spec::Algorithm3d>,
     #[serde(default)]
     pub algorithm_fallback: Option<String>,
+    /// The meshed part the whole model is made of (`mesh.unfold`); `None`:
+    /// the model is the meshed part itself.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub unfolded_from: Option<String>,
     pub timings_s: Timings,
+}
+
+impl MeshReport {
+    /// The report of `whole`, the model unfolded from the part this report
+    /// describes: counts and measures of the whole specimen.
+    pub fn of_unfolded(&self, whole: &Model) -> MeshReport {
+        let copies = self.symmetry.force_factor();
+        let scale = |n: usize| (n as f64 * copies).round() as usize;
+        let in_zone = |zone| whole.interfaces.iter().filter(move |e| e.zone == zone);
+        let steel = whole
+            .tet_region
+            .iter()
+            .filter(|r| **r == crate::model::Region::Steel)
+            .count();
+        let twins: std::collections::BTreeSet<u32> = whole
+            .interfaces
+            .iter()
+            .flat_map(|e| e.nodes[3..].iter().copied())
+            .collect();
+        MeshReport {
+            nodes: whole.nodes.len(),
+            tets_steel: steel,
+            tets_concrete: whole.tets.len() - steel,
+            interface_elements_adhesive: in_zone(InterfaceZone::Adhesive).count(),
+            interface_elements_free: in_zone(InterfaceZone::Free).count(),
+            duplicated_nodes: twins.len(),
+            reoriented_tets: scale(self.reoriented_tets),
+            tets_quality_below_0_1: scale(self.tets_quality_below_0_1),
+            interface_area_adhesive_m2: in_zone(InterfaceZone::Adhesive).map(|e| e.area).sum(),
+            interface_area_free_m2: in_zone(InterfaceZone::Free).map(|e| e.area).sum(),
+            volume_steel_m3: copies * self.volume_steel_m3,
+            volume_concrete_m3: copies * self.volume_concrete_m3,
+            symmetry: Symmetry::Full,
+            symmetry_nodes_x: 0,
+            symmetry_nodes_y: 0,
+            unfolded_from: Some(symmetry_name::name(self.symmetry).to_string()),
+            ..self.clone()
+        }
+    }
 }
 
 /// `Symmetry` as the lower-case name `geometry.json` also uses.
@@ -94,13 +137,17 @@ mod symmetry_name {
     use crate::model::Symmetry;
     use serde::{Deserialize, Deserializer, Serializer};
 
-    pub fn serialize<S: Serializer>(s: &Symmetry, ser: S) -> Result<S::Ok, S::Error> {
-        ser.serialize_str(match s {
+    pub fn name(s: Symmetry) -> &'static str {
+        match s {
             Symmetry::Full => "full",
             Symmetry::Half => "half",
             Symmetry::Quarter => "quarter",
             Symmetry::HalfTurn => "half_turn",
-        })
+        }
+    }
+
+    pub fn serialize<S: Serializer>(s: &Symmetry, ser: S) -> Result<S::Ok, S::Error> {
+        ser.serialize_str(name(*s))
     }
 
     pub fn deserialize<'de, D: Deserializer<'de>>(de: D) -> Result<Symmetry, D::Error> {

@@ -182,7 +182,11 @@ pub fn mesh_specimen(
     raw.source = finals[0].clone();
     let t_read = t.elapsed().as_secs_f64();
     let t = Instant::now();
-    let (model, mut report) = build_model(&raw, bar_diameter, adhesive_length)?;
+    let (mut model, mut report) = build_model(&raw, bar_diameter, adhesive_length)?;
+    if spec.unfold && model.symmetry != Symmetry::Full {
+        model = model.unfold().model;
+        report = report.of_unfolded(&model);
+    }
     let t_build = t.elapsed().as_secs_f64();
     drop(raw);
 

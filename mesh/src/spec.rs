@@ -86,6 +86,9 @@ pub struct RawMeshSpec {
     pub threads: Option<u32>,
     /// Wall-clock limit for gmsh (time; default 600 s).
     pub timeout: Option<RawQuantity>,
+    /// Write the whole specimen made of the meshed part and its images
+    /// (default false).
+    pub unfold: Option<bool>,
 }
 
 /// The resolved `mesh` section, SI units.
@@ -106,6 +109,18 @@ pub struct MeshSpec {
     pub threads: u32,
     /// Wall-clock limit for gmsh, s.
     pub timeout: f64,
+    /// The model written is the whole specimen made of the meshed part
+    /// (`specimen.symmetry`) and its images under the part's symmetry, so
+    /// the whole's mesh has that symmetry exactly: a whole-specimen run
+    /// that differs from the part's only by the symmetry it does not
+    /// impose. Left out of the serialised spec when false, so other
+    /// meshes keep their cache keys.
+    #[serde(default, skip_serializing_if = "is_false")]
+    pub unfold: bool,
+}
+
+fn is_false(v: &bool) -> bool {
+    !*v
 }
 
 impl Default for MeshSpec {
@@ -118,6 +133,7 @@ impl Default for MeshSpec {
             optimize: Optimize::Gmsh,
             threads: 1,
             timeout: DEFAULT_TIMEOUT,
+            unfold: false,
         }
     }
 }
@@ -194,6 +210,7 @@ impl RawMeshSpec {
             optimize,
             threads,
             timeout,
+            unfold: self.unfold.unwrap_or(d.unfold),
         })
     }
 }

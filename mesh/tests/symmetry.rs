@@ -247,6 +247,52 @@ fn half_model(side_b: &str, symmetry: &str, expect: Symmetry) -> Model {
     assert_eq!(whole.model.interfaces.len(), 2 * m.interfaces.len());
     let area = |model: &Model| model.interfaces.iter().map(|e| e.area).sum::<f64>();
     assert!((area(&whole.model) - 2.0 * area(&m)).abs() < 1e-9 * area(&m));
+
+    // `mesh.unfold`: the mesh stage writes that whole, with its report.
+    let unfolded_dir = dir.join("unfolded");
+    let spec = MeshSpec {
+        unfold: true,
+        ..spec
+    };
+    let ru = mesh_specimen(
+        gmsh(),
+        &dir.join("specimen.geo"),
+        &spec,
+        0.008,
+        0.010,
+        &unfolded_dir,
+    )
+    .unwrap();
+    let mu = Model::load(&unfolded_dir.join(mesh::MODEL_FILE)).unwrap();
+    assert_eq!(mu.symmetry, Symmetry::Full);
+    assert_eq!(mu.nodes, whole.model.nodes);
+    assert_eq!(mu.tets, whole.model.tets);
+    assert_eq!(mu.interfaces.len(), whole.model.interfaces.len());
+    assert_eq!(ru.symmetry, Symmetry::Full);
+    assert_eq!(
+        ru.unfolded_from.as_deref(),
+        Some(if expect == Symmetry::HalfTurn {
+            "half_turn"
+        } else {
+            "half"
+        })
+    );
+    assert_eq!(
+        (ru.nodes, ru.tets_steel + ru.tets_concrete),
+        (mu.nodes.len(), mu.tets.len())
+    );
+    assert_eq!(ru.tets_steel, 2 * r.tets_steel);
+    assert!(
+        (ru.interface_area_adhesive_m2 - 2.0 * r.interface_area_adhesive_m2).abs()
+            < 1e-9 * ru.interface_area_adhesive_m2
+    );
+    assert!(
+        (ru.volume_concrete_m3 - 2.0 * r.volume_concrete_m3).abs() < 1e-9 * ru.volume_concrete_m3
+    );
+    // Twins on the cut plane are shared with the image.
+    assert!(
+        ru.duplicated_nodes > r.duplicated_nodes && ru.duplicated_nodes < 2 * r.duplicated_nodes
+    );
     let _ = std::fs::remove_dir_all(&dir);
     m
 }
