@@ -228,6 +228,22 @@ impl Observer for StageObserver<'_> {
         }
         let discarded = |step: usize| step > kept.len();
         self.profile.retain(|r| !discarded(r.step));
+        // Fields of discarded steps: rewritten if the run reaches those
+        // steps again, and must not outlive it if it does not.
+        for &step in self
+            .ctx
+            .scene
+            .outputs
+            .fields
+            .steps
+            .iter()
+            .filter(|&&s| discarded(s))
+        {
+            for part in ["bulk", "interface"] {
+                let _ =
+                    std::fs::remove_file(self.fields_dir.join(format!("step{step:04}_{part}.vtu")));
+            }
+        }
         let peak_discarded = self
             .pending_peak
             .as_ref()
