@@ -300,7 +300,7 @@ pub enum PathFollowing {
 /// When the solver holds the interface points whose regime keeps
 /// switching between Newton iterates (docs/solver.md, "Law switches").
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default)]
-#[serde(rename_all = "snake_case")]
+#[serde(rename_all = "snake_case", try_from = "RawInterfaceHolds")]
 pub enum InterfaceHolds {
     /// Never: a step whose interface chatters is cut back, and stalls at
     /// the minimum step.
@@ -314,6 +314,33 @@ pub enum InterfaceHolds {
     OnStall,
     /// In the retries of every step.
     Always,
+}
+
+/// `solver.interface_holds` as written: a mode, or the bool of the first
+/// version of the option (`true`: in every step, `false`: never).
+#[derive(Deserialize)]
+#[serde(untagged)]
+enum RawInterfaceHolds {
+    Flag(bool),
+    Mode(String),
+}
+
+impl TryFrom<RawInterfaceHolds> for InterfaceHolds {
+    type Error = String;
+    fn try_from(raw: RawInterfaceHolds) -> Result<Self, String> {
+        match raw {
+            RawInterfaceHolds::Flag(true) => Ok(Self::Always),
+            RawInterfaceHolds::Flag(false) => Ok(Self::Off),
+            RawInterfaceHolds::Mode(m) => match m.as_str() {
+                "off" => Ok(Self::Off),
+                "on_stall" => Ok(Self::OnStall),
+                "always" => Ok(Self::Always),
+                _ => Err(format!(
+                    "solver.interface_holds: `{m}` is not one of off, on_stall, always"
+                )),
+            },
+        }
+    }
 }
 
 /// First iterate of a load step.
@@ -621,6 +648,26 @@ impl RawSolver {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `interface_holds` takes its modes, and the first version's bools.
+    #[test]
+    fn interface_holds_modes_and_bools() {
+        let parse = |v: &str| serde_yaml::from_str::<InterfaceHolds>(v);
+        assert_eq!(parse("on_stall").unwrap(), InterfaceHolds::OnStall);
+        assert_eq!(parse("always").unwrap(), InterfaceHolds::Always);
+        assert_eq!(parse("off").unwrap(), InterfaceHolds::Off);
+        assert_eq!(parse("true").unwrap(), InterfaceHolds::Always);
+        assert_eq!(parse("false").unwrap(), InterfaceHolds::Off);
+        let e = parse("sometimes").unwrap_err().to_string();
+        assert!(
+            e.contains("solver.interface_holds") && e.contains("on_stall"),
+            "{e}"
+        );
+        assert_eq!(
+            serde_json::to_string(&InterfaceHolds::OnStall).unwrap(),
+            "\"on_stall\""
+        );
+    }
 
     #[test]
     fn unknown_key_and_bad_values_are_named() {
