@@ -102,13 +102,17 @@ impl StageObserver<'_> {
         Ok(())
     }
 
-    /// Writes the checkpoint of the converged state `view`, the peak's
-    /// fields first: a resumed run never rewrites a peak it has already
-    /// passed.
-    fn save_checkpoint(&mut self, view: &CommittedView<'_>) -> Result<()> {
-        self.write_pending_peak(view.model)?;
+    /// Writes the solver's `checkpoint` of a converged state of `model`,
+    /// with this observer's record, the peak's fields first: a resumed run
+    /// never rewrites a peak it has already passed.
+    fn save_checkpoint(
+        &mut self,
+        model: &Model,
+        checkpoint: impl FnOnce() -> Checkpoint,
+    ) -> Result<()> {
+        self.write_pending_peak(model)?;
         let started = Instant::now();
-        let mut checkpoint = (view.checkpoint)();
+        let mut checkpoint = checkpoint();
         checkpoint.record = ObserverRecord {
             energy: self
                 .energy
@@ -196,7 +200,7 @@ impl Observer for StageObserver<'_> {
         if result.is_ok()
             && self.last_checkpoint.elapsed() >= self.checkpoint_cost * CHECKPOINT_COST_RATIO
         {
-            result = self.save_checkpoint(view);
+            result = self.save_checkpoint(view.model, view.checkpoint);
         }
         if let Err(e) = result {
             self.error = Some(e);
@@ -204,8 +208,9 @@ impl Observer for StageObserver<'_> {
     }
 
     fn rewound(&mut self, stalled: usize, view: &CommittedView<'_>) {
+        // Built once: the state to go back to is also what is saved.
         let checkpoint = (view.checkpoint)();
-        let kept = &checkpoint.rows;
+        let kept = checkpoint.rows.clone();
         self.ctx.printer.line(&format!(
             "solve: step {stalled} stalled; going back to step {} (u = {:.4} mm), from where \
              interface points that chatter may be held (solver.interface_holds: on_stall)",
@@ -269,7 +274,7 @@ impl Observer for StageObserver<'_> {
         }
         // A resume from here must not find a checkpoint of a discarded step.
         if self.error.is_none() {
-            if let Err(e) = self.save_checkpoint(view) {
+            if let Err(e) = self.save_checkpoint(view.model, || checkpoint) {
                 self.error = Some(e);
             }
         }
