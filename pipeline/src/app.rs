@@ -10,6 +10,7 @@ use crate::store::Store;
 use anyhow::{Context, Result};
 use clap::Parser;
 use std::ffi::OsString;
+use std::io::Write;
 use std::process::ExitCode;
 
 /// An error as the command line reports it: `error: ` and the message,
@@ -56,12 +57,23 @@ where
     match dispatch(cli.command, &printer) {
         Ok(code) if code == ExitCode::SUCCESS => 0,
         Ok(_) => 1,
+        // A reader that closed the pipe (`ribbar status ... | head -1`)
+        // wanted no more: stop quietly, as other command-line tools do.
+        Err(err) if is_broken_pipe(&err) => 0,
         Err(err) => {
             printer.finish();
             eprintln!("{}", error_report(&err));
             1
         }
     }
+}
+
+fn is_broken_pipe(err: &anyhow::Error) -> bool {
+    err.chain().any(|cause| {
+        cause
+            .downcast_ref::<std::io::Error>()
+            .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
+    })
 }
 
 fn dispatch(command: Command, printer: &Printer) -> Result<ExitCode> {
@@ -90,6 +102,7 @@ fn status(args: &SceneArgs) -> Result<ExitCode> {
     let gmsh = geom::gmsh::Gmsh::locate().context("status needs gmsh's version for the keys")?;
     let keys = Keys::of(&scene, gmsh.version());
     let store = Store::new(&args.work);
+    let mut out = std::io::stdout().lock();
     let mut all_done = true;
     for (stage, st) in stage::status(&store, &scene, &keys)? {
         let text = match &st {
@@ -113,10 +126,10 @@ fn status(args: &SceneArgs) -> Result<ExitCode> {
             ),
         };
         all_done &= st == StageStatus::UpToDate;
-        println!("{:<9} {}", stage, text);
+        writeln!(out, "{:<9} {}", stage, text)?;
     }
     if all_done {
-        println!("every stage is up to date");
+        writeln!(out, "every stage is up to date")?;
     }
     Ok(ExitCode::SUCCESS)
 }

@@ -6,6 +6,7 @@ use crate::scene::Scene;
 use crate::stage::{Ctx, Keys, Stage};
 use crate::store::Store;
 use anyhow::{Context, Result};
+use std::io::Write;
 use std::path::Path;
 use std::process::ExitCode;
 
@@ -96,18 +97,21 @@ pub fn compare(args: &CompareArgs) -> Result<ExitCode> {
     let distance = crate::post::curve_distance(&test, &reference, axis, None)?;
     let (peak_t, fed_t, _) = crate::post::first_peak_bond_stress(&test)?;
     let (peak_r, fed_r, _) = crate::post::first_peak_bond_stress(&reference)?;
-    println!(
+    let mut out = std::io::stdout().lock();
+    writeln!(
+        out,
         "relative L2 distance of sigma_mb along {name}: {:.4} %",
         100.0 * distance
-    );
-    println!(
+    )?;
+    writeln!(
+        out,
         "first peak: {:.4} MPa at FED {:.4} mm (test), {:.4} MPa at FED {:.4} mm (reference), {:+.3} %",
         peak_t / 1e6,
         fed_t * 1e3,
         peak_r / 1e6,
         fed_r * 1e3,
         100.0 * (peak_t / peak_r - 1.0)
-    );
+    )?;
     Ok(ExitCode::SUCCESS)
 }
 

@@ -288,6 +288,10 @@ fn bad_input_is_reported_and_keeps_artifacts() {
         (&["--set", "loading.cutback=2"], "loading.cutback"),
         (&["--set", "loading.max_steps=0"], "loading.max_steps"),
         (&["--set", "bar.diameter"], "KEY=VALUE"),
+        (
+            &["--set", "solver.max_iterations=many"],
+            "solver.max_iterations: invalid type",
+        ),
     ];
     for (extra, needle) in cases {
         let mut args = vec!["run", TINY, "--work", w];
@@ -407,6 +411,33 @@ fn material_driver_writes_csv() {
         text(&o)
     );
     std::fs::remove_dir_all(&work).unwrap();
+}
+
+/// A reader that stops early (`ribbar material F | head -1`) ends the
+/// command quietly: exit 0, no error, no panic.
+#[test]
+fn closed_stdout_ends_quietly() {
+    use std::io::{BufRead, BufReader};
+    let file = repo().join("specs/material/fczm-shear-reverse.yaml");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_ribbar"))
+        .args(["material", file.to_str().unwrap()])
+        .current_dir(repo())
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut first = String::new();
+    BufReader::new(child.stdout.take().unwrap())
+        .read_line(&mut first)
+        .unwrap();
+    // The table is larger than a pipe's buffer, so the writer meets the
+    // closed end.
+    assert!(first.starts_with("t,un,ut"), "{first}");
+    let o = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(0), "{err}");
+    assert!(err.is_empty(), "{err}");
 }
 
 /// The six curve columns must agree to the bit; the energy diagnostics
