@@ -117,7 +117,10 @@ impl fmt::Display for Dim {
 
 /// A quantity as written in a spec: a number (SI) or "value unit".
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(untagged)]
+#[serde(
+    untagged,
+    expecting = "a number in SI units or a quantity with a unit, e.g. 8 mm or \"30 GPa\""
+)]
 pub enum RawQuantity {
     Number(f64),
     Text(String),

@@ -136,6 +136,30 @@ fn take_non_adhesive(tree: &mut serde_yaml::Value) -> Result<Option<NonAdhesive>
     }
 }
 
+/// A deserialisation error prefixed with the dotted key it concerns (the
+/// spec tree has lost its line numbers once overrides are applied), and the
+/// `--set` argument that wrote the key, if one did.
+fn located_message(
+    err: &serde_path_to_error::Error<serde_yaml::Error>,
+    overrides: &[String],
+) -> String {
+    let key = err.path().to_string();
+    let inner = err.inner().to_string();
+    if key.is_empty() || key == "." {
+        return inner;
+    }
+    let set_by = overrides.iter().find(|arg| {
+        arg.split_once('=').is_some_and(|(k, _)| {
+            let k = k.trim();
+            key == k || key.starts_with(&format!("{k}."))
+        })
+    });
+    match set_by {
+        Some(arg) => format!("{key}: {inner} (from --set {arg})"),
+        None => format!("{key}: {inner}"),
+    }
+}
+
 impl Scene {
     /// Reads `path`, applies `overrides` (`key.path=value`), resolves.
     pub fn load(path: &Path, overrides: &[String]) -> Result<Scene, SceneError> {
@@ -165,7 +189,11 @@ impl Scene {
             path: path.to_path_buf(),
             message,
         })?;
-        let mut raw: RawScene = serde_yaml::from_value(tree).map_err(yaml_err)?;
+        let mut raw: RawScene =
+            serde_path_to_error::deserialize(tree).map_err(|e| SceneError::Yaml {
+                path: path.to_path_buf(),
+                message: located_message(&e, overrides),
+            })?;
         raw.non_adhesive = non_adhesive;
         let mut scene = raw.resolve().map_err(|source| SceneError::Invalid {
             path: path.to_path_buf(),
@@ -223,6 +251,37 @@ mod tests {
             .to_string();
         assert!(
             err.contains("specimen.non_adhesive") && err.contains("glued"),
+            "{err}"
+        );
+    }
+
+    /// Type errors found after the tree is built name the key, and the
+    /// `--set` argument when one wrote it.
+    #[test]
+    fn type_errors_name_the_key_and_the_override() {
+        let path = Path::new("s.yaml");
+        let in_file = format!("{SCENE}solver: {{max_iterations: abc}}\n");
+        let err = Scene::from_yaml(&in_file, path, &[])
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.starts_with("s.yaml: solver.max_iterations: ") && !err.contains("--set"),
+            "{err}"
+        );
+        let set = "solver.max_iterations=abc".to_string();
+        let err = Scene::from_yaml(SCENE, path, &[set])
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("solver.max_iterations: ")
+                && err.ends_with("(from --set solver.max_iterations=abc)"),
+            "{err}"
+        );
+        let err = Scene::from_yaml(SCENE, path, &["bar.diameter=[8]".into()])
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("bar.diameter: ") && err.contains("quantity with a unit"),
             "{err}"
         );
     }
