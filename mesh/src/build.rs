@@ -99,7 +99,7 @@ impl MeshReport {
     pub fn of_unfolded(&self, whole: &Model) -> MeshReport {
         let copies = self.symmetry.force_factor();
         let scale = |n: usize| (n as f64 * copies).round() as usize;
-        let in_zone = |zone| whole.interfaces.iter().filter(move |e| e.zone == zone);
+        let interfaces = InterfaceTally::of(&whole.interfaces);
         let steel = whole
             .tet_region
             .iter()
@@ -114,13 +114,13 @@ impl MeshReport {
             nodes: whole.nodes.len(),
             tets_steel: steel,
             tets_concrete: whole.tets.len() - steel,
-            interface_elements_adhesive: in_zone(InterfaceZone::Adhesive).count(),
-            interface_elements_free: in_zone(InterfaceZone::Free).count(),
+            interface_elements_adhesive: interfaces.elements_adhesive,
+            interface_elements_free: interfaces.elements_free,
             duplicated_nodes: twins.len(),
             reoriented_tets: scale(self.reoriented_tets),
             tets_quality_below_0_1: scale(self.tets_quality_below_0_1),
-            interface_area_adhesive_m2: in_zone(InterfaceZone::Adhesive).map(|e| e.area).sum(),
-            interface_area_free_m2: in_zone(InterfaceZone::Free).map(|e| e.area).sum(),
+            interface_area_adhesive_m2: interfaces.area_adhesive_m2,
+            interface_area_free_m2: interfaces.area_free_m2,
             volume_steel_m3: copies * self.volume_steel_m3,
             volume_concrete_m3: copies * self.volume_concrete_m3,
             symmetry: Symmetry::Full,
@@ -129,6 +129,38 @@ impl MeshReport {
             unfolded_from: Some(symmetry_name::name(self.symmetry).to_string()),
             ..self.clone()
         }
+    }
+}
+
+/// Interface elements and their area per zone, as the report gives them.
+struct InterfaceTally {
+    elements_adhesive: usize,
+    elements_free: usize,
+    area_adhesive_m2: f64,
+    area_free_m2: f64,
+}
+
+impl InterfaceTally {
+    fn of(interfaces: &[InterfaceElement]) -> Self {
+        let mut tally = InterfaceTally {
+            elements_adhesive: 0,
+            elements_free: 0,
+            area_adhesive_m2: 0.0,
+            area_free_m2: 0.0,
+        };
+        for e in interfaces {
+            match e.zone {
+                InterfaceZone::Adhesive => {
+                    tally.elements_adhesive += 1;
+                    tally.area_adhesive_m2 += e.area;
+                }
+                InterfaceZone::Free => {
+                    tally.elements_free += 1;
+                    tally.area_free_m2 += e.area;
+                }
+            }
+        }
+        tally
     }
 }
 
@@ -262,17 +294,13 @@ pub fn build_model(
     let (node_sets, symmetry) = node_sets(raw, &numbering)?;
 
     let n_tets = tets.tets.len() as f64;
-    let in_zone = |zone| {
-        interfaces
-            .iter()
-            .filter(move |e: &&InterfaceElement| e.zone == zone)
-    };
+    let tally = InterfaceTally::of(&interfaces);
     let report = MeshReport {
         nodes: numbering.nodes.len(),
         tets_steel: steel.len(),
         tets_concrete: concrete.len(),
-        interface_elements_adhesive: in_zone(InterfaceZone::Adhesive).count(),
-        interface_elements_free: in_zone(InterfaceZone::Free).count(),
+        interface_elements_adhesive: tally.elements_adhesive,
+        interface_elements_free: tally.elements_free,
         duplicated_nodes: numbering.duplicated,
         reoriented_tets: reoriented_steel + reoriented_concrete,
         min_quality: tets.quality.iter().copied().fold(f64::INFINITY, f64::min),
@@ -280,8 +308,8 @@ pub fn build_model(
         tets_quality_below_0_1: tets.quality.iter().filter(|&&q| q < 0.1).count(),
         min_size_m: tets.size.iter().copied().fold(f64::INFINITY, f64::min),
         max_size_m: tets.size.iter().copied().fold(0.0, f64::max),
-        interface_area_adhesive_m2: in_zone(InterfaceZone::Adhesive).map(|e| e.area).sum(),
-        interface_area_free_m2: in_zone(InterfaceZone::Free).map(|e| e.area).sum(),
+        interface_area_adhesive_m2: tally.area_adhesive_m2,
+        interface_area_free_m2: tally.area_free_m2,
         volume_steel_m3: tets.volume_steel,
         volume_concrete_m3: tets.volume_concrete,
         symmetry,
