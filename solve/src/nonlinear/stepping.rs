@@ -1254,8 +1254,11 @@ fn release_retried(committed: &mut States, explicit: &[bool]) {
 /// at the history of its last iterate in `trial`; returns how many.
 fn hold_pairs(held: &mut Vec<(usize, HeldHistory)>, flipping: &[usize], trial: &States) -> usize {
     let before = held.len();
+    // At the paper's mesh tens of thousands of points flip in one iterate:
+    // a scan of `held` per point would be quadratic.
+    let mut known: std::collections::HashSet<usize> = held.iter().map(|&(j, _)| j).collect();
     for &i in flipping {
-        if !held.iter().any(|&(j, _)| j == i) {
+        if known.insert(i) {
             held.push((i, HeldHistory::of(&trial.interface[i])));
         }
     }
