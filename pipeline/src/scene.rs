@@ -148,7 +148,8 @@ fn located_message(
     if key.is_empty() || key == "." {
         return inner;
     }
-    let set_by = overrides.iter().find(|arg| {
+    // The last of repeated `--set`s of a key is the one that holds.
+    let set_by = overrides.iter().rev().find(|arg| {
         arg.split_once('=').is_some_and(|(k, _)| {
             let k = k.trim();
             key == k || key.starts_with(&format!("{k}."))
@@ -268,13 +269,16 @@ mod tests {
             err.starts_with("s.yaml: solver.max_iterations: ") && !err.contains("--set"),
             "{err}"
         );
-        let set = "solver.max_iterations=abc".to_string();
-        let err = Scene::from_yaml(SCENE, path, &[set])
+        let sets = [
+            "solver.max_iterations=abc".to_string(),
+            "solver.max_iterations=also wrong".to_string(),
+        ];
+        let err = Scene::from_yaml(SCENE, path, &sets)
             .unwrap_err()
             .to_string();
         assert!(
             err.contains("solver.max_iterations: ")
-                && err.ends_with("(from --set solver.max_iterations=abc)"),
+                && err.ends_with("(from --set solver.max_iterations=also wrong)"),
             "{err}"
         );
         let err = Scene::from_yaml(SCENE, path, &["bar.diameter=[8]".into()])
