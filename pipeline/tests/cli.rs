@@ -515,10 +515,31 @@ fn killed_runs_resume_to_the_same_curve() {
         }
         let out = ok(&args);
         resumed |= out.contains("resuming after step");
+        // Should the curves differ, say whether the mesh did too.
+        let mesh_line = |dir: &Path| {
+            std::fs::read_to_string(dir.join("mesh.json"))
+                .ok()
+                .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
+                .map(|m| {
+                    format!(
+                        "nodes {} tets {}+{} 3d {} fallback {}",
+                        m["nodes"],
+                        m["tets_steel"],
+                        m["tets_concrete"],
+                        m["algorithm_3d"],
+                        m["algorithm_fallback"]
+                    )
+                })
+                .unwrap_or_default()
+        };
         assert_same_curve(
             &read(&scene.join("curve.csv")),
             &expected,
-            &format!("after a kill at {delay:?}"),
+            &format!(
+                "after a kill at {delay:?} (mesh: {} against the reference's {}; output of the resumed run:\n{out})",
+                mesh_line(&scene),
+                mesh_line(&reference.join("tiny-smooth"))
+            ),
         );
         ok(&["clean", "--all", "--work", w]);
         std::fs::remove_dir_all(&scene).unwrap();
