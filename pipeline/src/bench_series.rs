@@ -226,10 +226,26 @@ struct Series {
     extra: Vec<String>,
 }
 
-fn mesh_series_plan(quick: bool) -> Vec<Series> {
+/// The settings every case of `specs/studies/NAME.yaml` shares (its `set:`),
+/// as `--set` arguments: a series that shares the study's runs reads them
+/// from the study instead of repeating them.
+fn study_settings(name: &str) -> Result<Vec<String>> {
+    let path = repo_file(&format!("specs/studies/{name}.yaml"));
+    let text =
+        std::fs::read_to_string(&path).with_context(|| format!("reading {}", path.display()))?;
+    let raw: crate::study::RawStudy =
+        serde_yaml::from_str(&text).with_context(|| format!("reading {}", path.display()))?;
+    Ok(raw
+        .set
+        .iter()
+        .map(|(k, v)| format!("{k}={}", crate::study::value_arg(v)))
+        .collect())
+}
+
+fn mesh_series_plan(quick: bool) -> Result<Vec<Series>> {
     if quick {
         // Seconds per grid: the tiny smooth scene (tests, smoke runs).
-        vec![Series {
+        Ok(vec![Series {
             label: "tiny-smooth",
             spec: repo_file("tests/data/tiny-smooth.yaml"),
             sizes: vec![3e-3, 2.5e-3, 2e-3],
@@ -237,10 +253,10 @@ fn mesh_series_plan(quick: bool) -> Vec<Series> {
                 "outputs.energy_fed_limit=\"0.2 mm\"".into(),
                 "outputs.plots=[]".into(),
             ],
-        }]
+        }])
     } else {
         let sizes = vec![1.6e-3, 1.2e-3, 0.8e-3, 0.4e-3];
-        vec![
+        Ok(vec![
             Series {
                 label: "smooth-80",
                 spec: repo_file("specs/smooth-80.yaml"),
@@ -251,15 +267,11 @@ fn mesh_series_plan(quick: bool) -> Vec<Series> {
                 label: "R1",
                 spec: repo_file("specs/r1-coarse.yaml"),
                 sizes,
-                // As specs/studies/r1-convergence.yaml (and specs/r1.yaml):
-                // the 0.4 mm grid needs IMPL-EX, and one series one
-                // integration.
-                extra: vec![
-                    "solver.concrete_integration=impl_ex".into(),
-                    "solver.impl_ex_tolerance=3e-2".into(),
-                ],
+                // The study's integration: the 0.4 mm grid needs IMPL-EX,
+                // and one series one integration.
+                extra: study_settings("r1-convergence")?,
             },
-        ]
+        ])
     }
 }
 
@@ -268,7 +280,7 @@ pub fn mesh_series(args: &BenchArgs, printer: &Printer) -> Result<ExitCode> {
     let work = std::path::absolute(&args.work)
         .with_context(|| format!("work directory {}", args.work.display()))?;
     // Checked before anything runs.
-    apply_sizes(&mut mesh_series_plan(args.quick), &args.sizes)?;
+    apply_sizes(&mut mesh_series_plan(args.quick)?, &args.sizes)?;
     let mut md = String::new();
     let _ = writeln!(
         md,
@@ -282,7 +294,7 @@ pub fn mesh_series(args: &BenchArgs, printer: &Printer) -> Result<ExitCode> {
          produced the cached artifacts, on this 2-core machine shared with other jobs.\n",
         command_line("mesh-series", args)
     );
-    let mut plan = mesh_series_plan(args.quick);
+    let mut plan = mesh_series_plan(args.quick)?;
     apply_sizes(&mut plan, &args.sizes)?;
     let mut series_plot: Vec<ErrorTimeSeries> = Vec::new();
     let mut any = false;
@@ -805,7 +817,7 @@ mod tests {
     use super::*;
 
     fn plan() -> Vec<Series> {
-        mesh_series_plan(false)
+        mesh_series_plan(false).unwrap()
     }
 
     #[test]
@@ -813,6 +825,13 @@ mod tests {
         let mut p = plan();
         apply_sizes(&mut p, &["r1=1.6, 1.2,1.0,0.8".into()]).unwrap();
         let r1 = p.iter().find(|s| s.label == "R1").unwrap();
+        assert!(
+            r1.extra
+                .iter()
+                .any(|a| a.starts_with("solver.concrete_integration=")),
+            "the R1 series takes the study's integration: {:?}",
+            r1.extra
+        );
         assert_eq!(r1.sizes.len(), 4);
         assert!((r1.sizes[2] - 1.0e-3).abs() < 1e-15);
         let smooth = p.iter().find(|s| s.label == "smooth-80").unwrap();
