@@ -231,15 +231,7 @@ struct Series {
 /// from the study instead of repeating them.
 fn study_settings(name: &str) -> Result<Vec<String>> {
     let path = repo_file(&format!("specs/studies/{name}.yaml"));
-    let text =
-        std::fs::read_to_string(&path).with_context(|| format!("reading {}", path.display()))?;
-    let raw: crate::study::RawStudy =
-        serde_yaml::from_str(&text).with_context(|| format!("reading {}", path.display()))?;
-    Ok(raw
-        .set
-        .iter()
-        .map(|(k, v)| format!("{k}={}", crate::study::value_arg(v)))
-        .collect())
+    Ok(crate::study::Study::load(&path)?.shared)
 }
 
 fn mesh_series_plan(quick: bool) -> Result<Vec<Series>> {

@@ -68,6 +68,8 @@ pub struct Study {
     /// The base spec, resolved against the study file's directory.
     pub base: PathBuf,
     pub keys: Vec<String>,
+    /// The `set:` overrides, as `key=value`, that every case starts with.
+    pub shared: Vec<String>,
     pub cases: Vec<Case>,
 }
 
@@ -122,7 +124,7 @@ impl Study {
         }
         let (keys, lists) = parameter_lists(&raw, &invalid)?;
         let combos = combinations(raw.combine, &keys, &lists, &invalid)?;
-        let common: Vec<String> = raw
+        let shared: Vec<String> = raw
             .set
             .iter()
             .map(|(k, v)| format!("{k}={}", value_arg(v)))
@@ -134,7 +136,7 @@ impl Study {
                 let name = format!("{}--{index}", raw.name);
                 let parameters: Vec<(String, serde_yaml::Value)> =
                     keys.iter().cloned().zip(values).collect();
-                let mut overrides = common.clone();
+                let mut overrides = shared.clone();
                 overrides.extend(
                     parameters
                         .iter()
@@ -154,6 +156,7 @@ impl Study {
             kind: raw.kind,
             base,
             keys,
+            shared,
             cases,
         })
     }
