@@ -1476,9 +1476,12 @@ fn dissipation_control_follows_a_snap_back() {
         ..SolverSettings::default()
     };
     let displacement = solve_pullout(&m, &laws, &loading, &displacement_only, None, &mut dtrace);
+    // It stops, also after starting again with the interface points held
+    // (the defaults' last resort).
     assert!(
         matches!(displacement, Err(SolveError::Stalled { .. })),
-        "displacement control should stop at the snap-back"
+        "displacement control should stop at the snap-back: {:?}",
+        displacement.map(|r| r.ending)
     );
     let settings = SolverSettings {
         path_following: PathFollowing::Energy,
@@ -1499,8 +1502,7 @@ fn dissipation_control_follows_a_snap_back() {
     // `auto` (the default) hands over where displacement control stops
     // and, with the interface points held for retries from the start
     // (`always`), follows the path to its end; without the holds it
-    // stalls at the peak here. (`on_stall` goes back to step 7 and
-    // stalls again: held only from there, 24 points do not settle.)
+    // stalls at the peak here.
     let auto_held = SolverSettings {
         interface_holds: InterfaceHolds::Always,
         ..SolverSettings::default()
@@ -1516,6 +1518,30 @@ fn dissipation_control_follows_a_snap_back() {
         auto.map(|r| r.ending)
     );
     assert!(atrace.0.windows(2).any(|w| w[1].0 < w[0].0 - 1e-12));
+    // The defaults (`on_stall`) go back to before the stall's cut-backs
+    // and stall again there (24 held points do not settle), then start
+    // again with the points held from step 1: `always`'s path, to the end.
+    let mut otrace = Trace(Vec::new());
+    let on_stall = solve_pullout(
+        &m,
+        &laws,
+        &loading,
+        &SolverSettings::default(),
+        None,
+        &mut otrace,
+    )
+    .expect("the defaults follow the snap-back");
+    assert!(
+        matches!(on_stall.ending, Ending::Unloaded { .. }),
+        "{:?}",
+        on_stall.ending
+    );
+    assert_eq!(on_stall.summary.interface_holds_from_step, Some(1));
+    let kept = &otrace.0[otrace.0.len() - on_stall.rows.len()..];
+    assert_eq!(kept.len(), atrace.0.len());
+    for (a, b) in kept.iter().zip(&atrace.0) {
+        assert!((a.1 - b.1).abs() <= 1e-6 * peak, "{a:?} vs {b:?}");
+    }
     let unheld = SolverSettings {
         interface_holds: InterfaceHolds::Off,
         ..SolverSettings::default()
@@ -1526,6 +1552,43 @@ fn dissipation_control_follows_a_snap_back() {
     // the way back in λ, ends with the same curve (SPEC §6 resume).
     let back = trace.0.windows(2).position(|w| w[1].0 < w[0].0).unwrap() + 2;
     resume_at(back, &m, &laws, &loading, &settings);
+    // Under the defaults, resumed from step 3 of the first pass (before
+    // both goings back; the first goes back to step 7 only) and from
+    // step 3 of the last (held from step 1):
+    // the same curve as the uninterrupted run.
+    struct FirstAndLast(Vec<solve::nonlinear::Checkpoint>);
+    impl Observer for FirstAndLast {
+        fn step_converged(&mut self, r: &StepReport, v: &CommittedView<'_>) {
+            if r.row.step == 3 {
+                self.0.push((v.checkpoint)());
+            }
+        }
+    }
+    let mut grab = FirstAndLast(Vec::new());
+    let full = solve_pullout(
+        &m,
+        &laws,
+        &loading,
+        &SolverSettings::default(),
+        None,
+        &mut grab,
+    )
+    .unwrap();
+    assert_eq!(grab.0.len(), 2, "step 3 in the first and the last pass");
+    assert_eq!(grab.0[0].summary.interface_holds_from_step, None);
+    for cp in [grab.0.swap_remove(0), grab.0.pop().unwrap()] {
+        let resumed = solve_pullout(
+            &m,
+            &laws,
+            &loading,
+            &SolverSettings::default(),
+            Some(cp),
+            &mut Silent,
+        )
+        .unwrap();
+        assert_eq!(full.rows, resumed.rows);
+        assert_eq!(resumed.summary.interface_holds_from_step, Some(1));
+    }
 }
 
 /// A bar whose section yields before the bond fails ends at its limit

@@ -211,12 +211,19 @@ impl Observer for StageObserver<'_> {
         // Built once: the state to go back to is also what is saved.
         let checkpoint = (view.checkpoint)();
         let kept = checkpoint.rows.clone();
-        self.ctx.printer.line(&format!(
-            "solve: step {stalled} stalled; going back to step {} (u = {:.4} mm), from where \
-             interface points that chatter may be held (solver.interface_holds: on_stall)",
-            kept.len(),
-            checkpoint.u_imposed * 1e3
-        ));
+        self.ctx.printer.line(&if kept.is_empty() {
+            format!(
+                "solve: step {stalled} stalled with interface points held; starting again \
+                 with them held from step 1 (solver.interface_holds: on_stall)"
+            )
+        } else {
+            format!(
+                "solve: step {stalled} stalled; going back to step {} (u = {:.4} mm), from where \
+                 interface points that chatter may be held (solver.interface_holds: on_stall)",
+                kept.len(),
+                checkpoint.u_imposed * 1e3
+            )
+        });
         if let Ok(tracker) = &mut self.energy {
             let mut rows = tracker.rows().to_vec();
             rows.truncate(kept.len());

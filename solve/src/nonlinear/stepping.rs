@@ -815,6 +815,24 @@ impl<'a> Driver<'a> {
             if let Some(back) = self.rewind.take() {
                 return Ok(Outcome::Continue(self.go_back(back, &path, observer)));
             }
+            if self.settings.interface_holds == InterfaceHolds::OnStall
+                && path
+                    .summary
+                    .interface_holds_from_step
+                    .is_some_and(|k| k > 1)
+            {
+                // Held from the step before the stall, the points did not
+                // settle either: the run starts again with them held from
+                // step 1, as under `always` (docs/solver.md, "Holds after a
+                // stall"). Decided by the summary alone, which checkpoints
+                // keep, so a resumed run goes the same way.
+                let start = self.start();
+                // As at the start: the kept preconditioner of the stalled
+                // state would steer the inexact Newton iterates elsewhere
+                // (measured: across the snap-back in one step).
+                self.ws.lin.refactor = true;
+                return Ok(Outcome::Continue(self.go_back(start, &path, observer)));
+            }
             return Err(SolveError::Stalled {
                 step,
                 u_imposed: lambda,
