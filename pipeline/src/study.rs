@@ -282,4 +282,26 @@ mod tests {
             .contains("at least 3 grids"));
         std::fs::remove_dir_all(&dir).unwrap();
     }
+
+    /// Every shipped study's every case is a valid scene: a `set:` or a
+    /// parameter value its base's laws reject fails here, not hours into
+    /// the study.
+    #[test]
+    fn every_shipped_study_case_is_a_valid_scene() {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../specs/studies");
+        let mut studies = 0;
+        for entry in std::fs::read_dir(&dir).unwrap() {
+            let path = entry.unwrap().path();
+            if path.extension().is_none_or(|e| e != "yaml") {
+                continue;
+            }
+            let study = Study::load(&path).unwrap_or_else(|e| panic!("{e}"));
+            for case in &study.cases {
+                crate::scene::Scene::load(&study.base, &case.overrides)
+                    .unwrap_or_else(|e| panic!("{}: case {}: {e}", path.display(), case.name));
+            }
+            studies += 1;
+        }
+        assert!(studies >= 10, "{studies} studies in {}", dir.display());
+    }
 }
