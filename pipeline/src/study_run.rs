@@ -238,6 +238,18 @@ pub fn collect(study: &Study, work: &Path, out: &Path, printer: &Printer) -> Res
     Ok(())
 }
 
+/// The quantities a convergence study estimates, as (name, pointer into
+/// summary.json). The largest σ_mb sits at the adhesion peak on some grids
+/// and at the end of the curve on others, so the first (adhesion) peak is
+/// estimated on its own.
+const CONVERGENCE_QUANTITIES: [(&str, &str); 5] = [
+    ("first_peak_bond_stress", "/curve/first_peak_bond_stress"),
+    ("fed_at_first_peak", "/curve/fed_at_first_peak"),
+    ("peak_bond_stress", "/curve/peak_bond_stress"),
+    ("fed_at_peak", "/curve/fed_at_peak"),
+    ("energy", "/curve/energy"),
+];
+
 fn convergence(grids: &[(f64, serde_json::Value)], out: &Path) -> Result<()> {
     let quantity = |pointer: &str| -> Vec<GridResult> {
         grids
@@ -254,14 +266,10 @@ fn convergence(grids: &[(f64, serde_json::Value)], out: &Path) -> Result<()> {
             })
             .collect()
     };
-    let studies: Vec<ConvergenceStudy> = [
-        ("peak_bond_stress", "/curve/peak_bond_stress"),
-        ("fed_at_peak", "/curve/fed_at_peak"),
-        ("energy", "/curve/energy"),
-    ]
-    .iter()
-    .filter_map(|(name, p)| post::convergence_study(name, &quantity(p)).ok())
-    .collect();
+    let studies: Vec<ConvergenceStudy> = CONVERGENCE_QUANTITIES
+        .iter()
+        .filter_map(|(name, p)| post::convergence_study(name, &quantity(p)).ok())
+        .collect();
     post::write_convergence_tables(
         &studies,
         &out.join("convergence.csv"),
@@ -361,4 +369,55 @@ pub fn snakefile(study: &Study, args: &StudyArgs) -> Result<String> {
 
 fn shell_quote(s: &str) -> String {
     format!("'{}'", s.replace('\'', "'\\''"))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every quantity of a summary gets its rows, the first peak among
+    /// them; a convergent series gets its extrapolation and error plot.
+    #[test]
+    fn convergence_tables_estimate_the_first_peak_and_the_energy() {
+        let out = std::env::temp_dir().join(format!("ribbar-conv-{}", std::process::id()));
+        std::fs::create_dir_all(&out).unwrap();
+        let grids: Vec<(f64, serde_json::Value)> = [4e-4, 2e-4, 1e-4]
+            .iter()
+            .map(|&h: &f64| {
+                let e = 1.0 + h * h * 1e6;
+                let curve = serde_json::json!({
+                    "first_peak_bond_stress": 5.7e6 * e,
+                    "fed_at_first_peak": 3e-5 * e,
+                    "peak_bond_stress": 6.0e6 * e,
+                    "fed_at_peak": 1e-3 * e,
+                    "energy": 3800.0 * e,
+                });
+                let solver =
+                    serde_json::json!({"summary": {"dofs": 1000, "wall_time_s": {"total": 1.0}}});
+                (h, serde_json::json!({"curve": curve, "solver": solver}))
+            })
+            .collect();
+        convergence(&grids, &out).unwrap();
+        let csv = std::fs::read_to_string(out.join("convergence.csv")).unwrap();
+        for (name, _) in CONVERGENCE_QUANTITIES {
+            assert!(
+                csv.lines().any(|l| l.starts_with(&format!("{name},"))),
+                "{name}: {csv}"
+            );
+        }
+        let md = std::fs::read_to_string(out.join("convergence.md")).unwrap();
+        let first_peak = md
+            .lines()
+            .find(|l| l.starts_with("| first_peak_bond_stress |") && l.contains("monotonic"))
+            .unwrap_or_else(|| panic!("{md}"));
+        // Second order in h, extrapolated to 5.7 MPa.
+        let cells: Vec<f64> = first_peak
+            .split('|')
+            .filter_map(|c| c.trim().parse().ok())
+            .collect();
+        assert!((cells[0] - 2.0).abs() < 1e-3, "{first_peak}");
+        assert!((cells[1] / 5.7e6 - 1.0).abs() < 1e-3, "{first_peak}");
+        assert!(out.join("error_vs_time.png").is_file());
+        std::fs::remove_dir_all(&out).ok();
+    }
 }
