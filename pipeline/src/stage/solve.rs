@@ -210,7 +210,7 @@ impl Observer for StageObserver<'_> {
     fn rewound(&mut self, stalled: usize, view: &CommittedView<'_>) {
         // Built once: the state to go back to is also what is saved.
         let checkpoint = (view.checkpoint)();
-        let kept = checkpoint.rows.clone();
+        let kept = &checkpoint.rows;
         self.ctx.printer.line(&if kept.is_empty() {
             format!(
                 "solve: step {stalled} stalled with interface points held; starting again \
