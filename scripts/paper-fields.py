@@ -27,6 +27,11 @@ def triangle_areas(points, tris):
     return 0.5 * np.linalg.norm(np.cross(b - a, c - a), axis=1)
 
 
+def tet_volumes(points, tets):
+    a, b, c, d = (points[tets[:, k]] for k in range(4))
+    return np.abs(np.einsum("ij,ij->i", b - a, np.cross(c - a, d - a))) / 6.0
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("scene_dir", type=pathlib.Path)
@@ -74,9 +79,7 @@ def main():
     # The damaged concrete's volume, against the size l each tet's
     # regularisation takes (the edge of the regular tet of its volume): a
     # crack band one element wide shrinks with l, a diffuse zone does not.
-    p = bulk.points[tets]
-    volume = np.abs(np.einsum("ij,ij->i", p[:, 1] - p[:, 0],
-                              np.cross(p[:, 2] - p[:, 0], p[:, 3] - p[:, 0]))) / 6.0
+    volume = tet_volumes(bulk.points, tets)
     for threshold in (0.5, 0.9, 0.99):
         sel = concrete & (damage > threshold)
         report[f"concrete_volume_D_above_{threshold}_m3"] = float(volume[sel].sum())

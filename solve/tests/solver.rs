@@ -1521,16 +1521,34 @@ fn dissipation_control_follows_a_snap_back() {
     // The defaults (`on_stall`) go back to before the stall's cut-backs
     // and stall again there (24 held points do not settle), then start
     // again with the points held from step 1: `always`'s path, to the end.
-    let mut otrace = Trace(Vec::new());
+    // The checkpoints of step 3 (in the first pass and the last) serve
+    // the resumes below.
+    struct TraceAndStep3 {
+        trace: Trace,
+        step3: Vec<solve::nonlinear::Checkpoint>,
+    }
+    impl Observer for TraceAndStep3 {
+        fn step_converged(&mut self, r: &StepReport, v: &CommittedView<'_>) {
+            self.trace.step_converged(r, v);
+            if r.row.step == 3 {
+                self.step3.push((v.checkpoint)());
+            }
+        }
+    }
+    let mut observed = TraceAndStep3 {
+        trace: Trace(Vec::new()),
+        step3: Vec::new(),
+    };
     let on_stall = solve_pullout(
         &m,
         &laws,
         &loading,
         &SolverSettings::default(),
         None,
-        &mut otrace,
+        &mut observed,
     )
     .expect("the defaults follow the snap-back");
+    let otrace = &observed.trace;
     assert!(
         matches!(on_stall.ending, Ending::Unloaded { .. }),
         "{:?}",
@@ -1554,29 +1572,12 @@ fn dissipation_control_follows_a_snap_back() {
     resume_at(back, &m, &laws, &loading, &settings);
     // Under the defaults, resumed from step 3 of the first pass (before
     // both goings back; the first goes back to step 7 only) and from
-    // step 3 of the last (held from step 1):
-    // the same curve as the uninterrupted run.
-    struct FirstAndLast(Vec<solve::nonlinear::Checkpoint>);
-    impl Observer for FirstAndLast {
-        fn step_converged(&mut self, r: &StepReport, v: &CommittedView<'_>) {
-            if r.row.step == 3 {
-                self.0.push((v.checkpoint)());
-            }
-        }
-    }
-    let mut grab = FirstAndLast(Vec::new());
-    let full = solve_pullout(
-        &m,
-        &laws,
-        &loading,
-        &SolverSettings::default(),
-        None,
-        &mut grab,
-    )
-    .unwrap();
-    assert_eq!(grab.0.len(), 2, "step 3 in the first and the last pass");
-    assert_eq!(grab.0[0].summary.interface_holds_from_step, None);
-    for cp in [grab.0.swap_remove(0), grab.0.pop().unwrap()] {
+    // step 3 of the last (held from step 1): the same curve as the
+    // uninterrupted run.
+    let mut grab = observed.step3;
+    assert_eq!(grab.len(), 2, "step 3 in the first and the last pass");
+    assert_eq!(grab[0].summary.interface_holds_from_step, None);
+    for cp in [grab.swap_remove(0), grab.pop().unwrap()] {
         let resumed = solve_pullout(
             &m,
             &laws,
@@ -1586,7 +1587,7 @@ fn dissipation_control_follows_a_snap_back() {
             &mut Silent,
         )
         .unwrap();
-        assert_eq!(full.rows, resumed.rows);
+        assert_eq!(on_stall.rows, resumed.rows);
         assert_eq!(resumed.summary.interface_holds_from_step, Some(1));
     }
 }
