@@ -292,7 +292,15 @@ impl Observer for StageObserver<'_> {
             "step {} at u = {:.4e} m: {}; step {:.3e} → {:.3e} m",
             event.step, event.u_imposed, event.reason, event.failed_step_size, event.next_step_size
         );
-        self.ctx.printer.detail(&format!("solve: cut back: {text}"));
+        let residuals: Vec<String> = event
+            .residual_history
+            .iter()
+            .map(|v| format!("{v:.2e}"))
+            .collect();
+        self.ctx.printer.detail(&format!(
+            "solve: cut back: {text}; relative residuals [{}]",
+            residuals.join(", ")
+        ));
         self.cutbacks.push(text);
     }
 }
