@@ -899,3 +899,100 @@ fn held_points_keep_their_history_and_give_the_laws_traction_once_settled() {
         assert!(held_elsewhere >= 10, "{name}: {held_elsewhere}");
     }
 }
+
+/// Interface IMPL-EX (`interface_integration: impl_ex`), FCZM and
+/// Tvergaard: with λ̃ extrapolated to `explicit_lambda` the traction is
+/// the law's at that fixed history (the same as from a committed state
+/// with λ̃ there, where the jump does not load further), its consistent
+/// tangent is the finite-difference derivative at that fixed history
+/// (no softening term), and the state returned is the implicit one with
+/// the increment of λ̃ the next extrapolation uses.
+#[test]
+fn interface_impl_ex_traction_uses_the_extrapolated_history() {
+    let laws: [(&str, AnyInterfaceLaw, f64); 3] = [
+        ("fczm", AnyInterfaceLaw::Fczm(fczm()), 2e-5),
+        (
+            "fczm calibrated",
+            AnyInterfaceLaw::Fczm(fczm_calibrated()),
+            5e-5,
+        ),
+        ("tvergaard", AnyInterfaceLaw::Tvergaard(tvergaard()), 1e-5),
+    ];
+    for (name, law, l0) in laws {
+        let committed = interface_history(&law, &[[0.3 * l0, 1.0 * l0, 0.2 * l0]]);
+        assert!(committed.lambda_max > 0.0, "{name}");
+        let le = committed.lambda_max + 2.0 * l0;
+        let start = InterfaceState {
+            explicit_lambda: Some(le),
+            ..committed
+        };
+        // At the extrapolated history, as a committed state (slip kept).
+        let at_history = InterfaceState {
+            lambda_max: le,
+            ..committed
+        };
+        let jumps = [
+            // Opening and sliding beyond both histories (implicit damage
+            // grows), in between, and closed in compression.
+            Vector3::new(1.0 * l0, 3.0 * l0, 0.5 * l0),
+            Vector3::new(0.2 * l0, 1.4 * l0, 0.3 * l0),
+            Vector3::new(-0.2 * l0, 1.2 * l0, -0.4 * l0),
+        ];
+        let mut checked = 0;
+        for u in jumps {
+            let implicit = law.step(&committed, &u, TangentKind::Consistent).unwrap();
+            let r = law.step(&start, &u, TangentKind::Consistent).unwrap();
+            let k = law.elastic_stiffness().norm();
+            let fixed = law.step(&at_history, &u, TangentKind::Consistent).unwrap();
+            // Where the jump does not pass the extrapolated history.
+            if fixed.state.lambda_max == le {
+                checked += 1;
+                assert!(
+                    (r.traction - fixed.traction).norm() <= 1e-12 * k * l0,
+                    "{name} {u:?}: {} vs {}",
+                    r.traction,
+                    fixed.traction
+                );
+            }
+            let fd = fd_interface(&law, &start, &u, 1e-6 * l0);
+            assert!(
+                (fd - r.tangent).norm() <= 1e-6 * k,
+                "{name} {u:?}: fd {fd} vs {}",
+                r.tangent
+            );
+            assert_eq!(r.state.lambda_max, implicit.state.lambda_max, "{name}");
+            assert_eq!(r.state.damage, implicit.state.damage, "{name}");
+            assert_eq!(r.state.slip, implicit.state.slip, "{name}");
+            assert_eq!(
+                r.state.lambda_increment,
+                implicit.state.lambda_max - committed.lambda_max,
+                "{name}"
+            );
+            assert_eq!(r.state.explicit_lambda, Some(le), "{name}");
+        }
+        assert!(checked >= 2, "{name}: {checked}");
+        // The extrapolation: the committed λ̃ at ratio 0, growing with the
+        // ratio by the last increment; laws without λ̃ untouched.
+        let next = law
+            .step(
+                &committed,
+                &Vector3::new(0.5 * l0, 1.6 * l0, 0.3 * l0),
+                TangentKind::Consistent,
+            )
+            .unwrap()
+            .state;
+        assert!(next.lambda_increment > 0.0, "{name}");
+        let at = |ratio: f64| law.extrapolate(&next, ratio).explicit_lambda.unwrap();
+        assert_eq!(at(0.0), next.lambda_max, "{name}");
+        assert!(
+            (at(2.0) - (next.lambda_max + 2.0 * next.lambda_increment)).abs() <= 1e-15,
+            "{name}"
+        );
+    }
+    let c = AnyInterfaceLaw::Coulomb(coulomb());
+    let s = InterfaceState {
+        lambda_increment: 1.0,
+        ..InterfaceState::default()
+    };
+    assert_eq!(c.extrapolate(&s, 3.0), s);
+}

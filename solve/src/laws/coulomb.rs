@@ -132,7 +132,7 @@ impl InterfaceLaw for Coulomb {
                 lambda_max: committed.lambda_max,
                 damage: if separated { 1.0 } else { committed.damage },
                 slip: [ret.slip[0], ret.slip[1]],
-                held: None,
+                ..InterfaceState::default()
             },
         })
     }

@@ -41,8 +41,8 @@
 use super::coulomb::slip_return;
 use super::tvergaard::opening;
 use super::{
-    check_finite, check_result, InterfaceLaw, InterfaceResponse, InterfaceState, LawError,
-    TangentKind,
+    check_finite, check_result, explicit_lambda, extrapolated_lambda, InterfaceLaw,
+    InterfaceResponse, InterfaceState, LawError, TangentKind,
 };
 use nalgebra::{Matrix3, Vector2, Vector3};
 use serde::{Deserialize, Serialize};
@@ -167,16 +167,27 @@ struct Undamaged {
 }
 
 impl Fczm {
-    /// `evolve`: whether λ̃ may grow (false: held, see `held_step`).
-    fn damage(&self, committed: &InterfaceState, jump: &Vector3<f64>, evolve: bool) -> Damage {
+    /// The damage the traction uses and the step's implicit λ̃ (m), the
+    /// state's. `evolve`: whether λ̃ may grow (false: held, see
+    /// `held_step`). Under IMPL-EX the traction's damage is that of the
+    /// extrapolated λ̃, fixed within the step (no derivative).
+    fn damage(
+        &self,
+        committed: &InterfaceState,
+        jump: &Vector3<f64>,
+        evolve: bool,
+    ) -> (Damage, f64) {
         let c = self.tensile_strength / (self.zeta * self.fracture_energy);
         let (lam, dlam) = opening(jump, self.delta_s);
-        let loading = evolve && lam - self.lambda0 > committed.lambda_max;
-        let lt = if loading {
+        let growing = evolve && lam - self.lambda0 > committed.lambda_max;
+        let implicit = if growing {
             lam - self.lambda0
         } else {
             committed.lambda_max.max(0.0)
         };
+        let explicit = explicit_lambda(committed, evolve);
+        let loading = growing && explicit.is_none();
+        let lt = explicit.unwrap_or(implicit);
         let big = lt + self.lambda0;
         let dbig = if loading { dlam } else { Vector3::zeros() };
         let q_nat = (-c * lt).exp();
@@ -192,7 +203,7 @@ impl Fczm {
         let dd = -dq;
         let r = self.lambda0 / big;
         let dr = dbig * (-self.lambda0 / (big * big));
-        Damage {
+        let damage = Damage {
             lt,
             dbig,
             q,
@@ -204,7 +215,14 @@ impl Fczm {
             floored,
             floor_q,
             c,
-        }
+        };
+        (damage, implicit)
+    }
+
+    /// D (22) at λ̃ = `lt` (m), never below `min_damage`.
+    fn damage_at(&self, lt: f64) -> f64 {
+        let c = self.tensile_strength / (self.zeta * self.fracture_energy);
+        1.0 - (-c * lt).exp().min(1.0 - self.min_damage)
     }
 
     fn undamaged(
@@ -293,7 +311,7 @@ impl InterfaceLaw for Fczm {
         let un = jump[0];
         let us = Vector2::new(jump[1], jump[2]);
 
-        let dmg = self.damage(committed, jump, evolve);
+        let (dmg, implicit) = self.damage(committed, jump, evolve);
         let Damage { lt, d, dd, .. } = dmg;
 
         // Damaged part: no tension, Coulomb friction (16–21).
@@ -356,12 +374,23 @@ impl InterfaceLaw for Fczm {
             traction,
             tangent,
             state: InterfaceState {
-                lambda_max: lt,
-                damage: d.max(committed.damage),
+                lambda_max: implicit,
+                damage: if implicit == lt {
+                    d
+                } else {
+                    self.damage_at(implicit)
+                }
+                .max(committed.damage),
                 slip: [ret.slip[0], ret.slip[1]],
                 held: None,
+                explicit_lambda: committed.explicit_lambda,
+                lambda_increment: implicit - committed.lambda_max.max(0.0),
             },
         })
+    }
+
+    fn extrapolate(&self, committed: &InterfaceState, ratio: f64) -> InterfaceState {
+        extrapolated_lambda(committed, ratio)
     }
 
     /// Undamaged part ½ [P_n K_n u_n² + P_s K_s |u_s|²] plus damaged part

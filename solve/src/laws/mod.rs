@@ -100,6 +100,39 @@ pub struct InterfaceState {
     /// follows the law. The state itself still evolves by the law.
     #[serde(default)]
     pub held: Option<HeldHistory>,
+    /// IMPL-EX integration of the interface damage
+    /// (`solver.interface_integration: impl_ex`): the λ̃ the traction uses
+    /// in this step, extrapolated by the solver from the implicit history
+    /// before the step; `None`: implicit (the traction uses the step's own
+    /// λ̃). `lambda_max` and `damage` stay implicit either way.
+    #[serde(default)]
+    pub explicit_lambda: Option<f64>,
+    /// Increment of λ̃ in the step that produced this state (the rate the
+    /// next extrapolation uses), m.
+    #[serde(default)]
+    pub lambda_increment: f64,
+}
+
+/// The λ̃ (m) a damage interface law's traction takes from the solver's
+/// extrapolation: `Some` while the history evolves under IMPL-EX, never
+/// below the committed λ̃.
+pub(crate) fn explicit_lambda(committed: &InterfaceState, evolve: bool) -> Option<f64> {
+    committed
+        .explicit_lambda
+        .filter(|_| evolve)
+        .map(|l| l.max(committed.lambda_max.max(0.0)))
+}
+
+/// The committed state with λ̃ extrapolated linearly over a step `ratio`
+/// times as long as the one that produced it (IMPL-EX, Oliver et al.
+/// 2008): what damage interface laws return from
+/// [`InterfaceLaw::extrapolate`].
+pub(crate) fn extrapolated_lambda(committed: &InterfaceState, ratio: f64) -> InterfaceState {
+    let start = committed.lambda_max.max(0.0);
+    InterfaceState {
+        explicit_lambda: Some(start + ratio.max(0.0) * committed.lambda_increment.max(0.0)),
+        ..*committed
+    }
 }
 
 /// An interface point's history as the solver holds it for one step: the
@@ -127,7 +160,7 @@ impl HeldHistory {
             lambda_max: self.lambda_max,
             damage: self.damage,
             slip: self.slip,
-            held: None,
+            ..InterfaceState::default()
         }
     }
 }
@@ -219,6 +252,12 @@ pub trait InterfaceLaw: Sync {
         response.state = *history;
         Ok(response)
     }
+    /// IMPL-EX: the committed state prepared for a step `ratio` times as
+    /// long as the one that produced it (`explicit_lambda` set); laws
+    /// without a damage history return it unchanged.
+    fn extrapolate(&self, committed: &InterfaceState, _ratio: f64) -> InterfaceState {
+        *committed
+    }
     /// The initial (undamaged) stiffness diag(K_n, K_s, K_s), N/m³.
     fn elastic_stiffness(&self) -> Matrix3<f64>;
     /// Recoverable energy per area (J/m²) at `jump` with `traction`, the
@@ -301,6 +340,15 @@ impl InterfaceLaw for AnyInterfaceLaw {
             AnyInterfaceLaw::Tvergaard(l) => l.respond(committed, jump, kind, evolve),
             AnyInterfaceLaw::Coulomb(l) => l.respond(committed, jump, kind, evolve),
             AnyInterfaceLaw::Elastic(l) => l.respond(committed, jump, kind, evolve),
+        }
+    }
+
+    fn extrapolate(&self, committed: &InterfaceState, ratio: f64) -> InterfaceState {
+        match self {
+            AnyInterfaceLaw::Fczm(l) => l.extrapolate(committed, ratio),
+            AnyInterfaceLaw::Tvergaard(l) => l.extrapolate(committed, ratio),
+            AnyInterfaceLaw::Coulomb(l) => l.extrapolate(committed, ratio),
+            AnyInterfaceLaw::Elastic(l) => l.extrapolate(committed, ratio),
         }
     }
 

@@ -82,7 +82,7 @@ pub enum CheckpointError {
     Corrupt { path: String, detail: String },
 }
 
-const CHECKPOINT_MAGIC: u64 = 0x7269_6262_6172_0007;
+const CHECKPOINT_MAGIC: u64 = 0x7269_6262_6172_0008;
 
 impl Checkpoint {
     /// Writes atomically (temporary file then rename), bincode.

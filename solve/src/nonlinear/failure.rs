@@ -103,6 +103,13 @@ pub enum StepFailure {
         relative_residual: f64,
         regimes: RegimeChanges,
     },
+    /// The step converged, but its IMPL-EX extrapolation error (the
+    /// relative residual of its displacement under the implicit damage) is
+    /// above `impl_ex_reject` × `impl_ex_tolerance`: redone shorter.
+    #[error(
+        "IMPL-EX extrapolation error {indicator:e} above {limit:e}: the step is redone shorter"
+    )]
+    ExtrapolationError { indicator: f64, limit: f64 },
     #[error("no convergence in {iterations} iterations (last relative residual {relative_residual:e}). {regimes}")]
     IterationLimit {
         iterations: usize,

@@ -18,11 +18,12 @@ use super::workspace::{reaction_norm, residual, LinearState, Workspace};
 use crate::assembly::{
     AssemblyError, ElementLaws, KeptBulkMatrix, LoadDerivatives, Outputs, States, System, Tangents,
 };
-use crate::laws::{BulkLaw, HeldHistory, TangentKind};
+use crate::elements::interface::INTERFACE_POINTS;
+use crate::laws::{BulkLaw, HeldHistory, InterfaceLaw, TangentKind};
 use crate::linalg::norm;
 use crate::spec::solver::{
-    ConcreteIntegration, InterfaceHolds, LinearSolverKind, Loading, PathFollowing, Predictor,
-    SolverSettings,
+    ConcreteIntegration, InterfaceHolds, InterfaceIntegration, LinearSolverKind, Loading,
+    PathFollowing, Predictor, SolverSettings,
 };
 use mesh::Model;
 use std::time::Instant;
@@ -137,9 +138,17 @@ struct Driver<'a> {
     /// history (IMPL-EX): every tet under `concrete_integration: impl_ex`,
     /// else the degenerate ones (quality below `solver.sliver_quality`).
     explicit: Vec<bool>,
+    /// Whether the interface points take their damage from an
+    /// extrapolation of their history (`interface_integration: impl_ex`).
+    explicit_interface: bool,
     /// The committed states with the extrapolated damage of the explicit
-    /// tets for the step being attempted; `None` when there are none.
+    /// tets (and interface points) for the step being attempted; `None`
+    /// when there are none.
     extrapolated: Option<States>,
+    /// The trial states and internal forces of the IMPL-EX error
+    /// indicator's evaluation (kept apart from the step's own, which the
+    /// commit reads).
+    indicator_trial: Option<(States, Vec<f64>)>,
     /// Under `solver.interface_holds: on_stall`, before the holds: the
     /// path before the first cut-back since the last easy step, which a
     /// stall goes back to.
@@ -279,7 +288,9 @@ impl<'a> Driver<'a> {
             settings,
             ws,
             explicit: explicit_tets(problem.model, settings),
+            explicit_interface: settings.interface_integration == InterfaceIntegration::ImplEx,
             extrapolated: None,
+            indicator_trial: None,
             rewind: None,
             wall,
             previous_wall: WallTimes::default(),
@@ -543,8 +554,31 @@ impl<'a> Driver<'a> {
         summary.factorisations = self.ws.lin.factorisations;
         summary.pcg_iterations = self.ws.lin.pcg_iterations;
         summary.krylov_iterations = self.ws.lin.krylov_iterations;
+        let mut attempt = attempt;
+        let impl_ex_residual = match attempt.failure {
+            None => self.extrapolation_error(&u_trial, &mut step_wall)?,
+            Some(_) => None,
+        };
+        if let (Some(e), Some(reject)) = (impl_ex_residual, self.settings.impl_ex_reject) {
+            let limit = reject * self.settings.impl_ex_tolerance;
+            if e > limit && plan.size > self.min_step(&path, &plan) * (1.0 + 1e-12) {
+                path.summary.impl_ex_rejections += 1;
+                path.summary.impl_ex_max_residual = path.summary.impl_ex_max_residual.max(e);
+                attempt.failure = Some(StepFailure::ExtrapolationError {
+                    indicator: e,
+                    limit,
+                });
+            }
+        }
         if attempt.failure.is_none() {
-            let path = self.commit(path, &plan, (u_trial, lambda), attempt, step_wall, observer)?;
+            let path = self.commit(
+                path,
+                &plan,
+                (u_trial, lambda),
+                (attempt, impl_ex_residual),
+                step_wall,
+                observer,
+            )?;
             Ok(
                 match self.yield_plateau(&path).or_else(|| self.lost_load(&path)) {
                     Some(ending) => Outcome::End(ending, path),
@@ -611,7 +645,9 @@ impl<'a> Driver<'a> {
     ) {
         self.ws.load = (plan.mode != ControlMode::Displacement)
             .then(|| LoadDerivatives::new(self.ws.system.dofs().n_free()));
-        let any = !(flipped.is_empty() && held.is_empty()) || self.explicit.iter().any(|&e| e);
+        let any = !(flipped.is_empty() && held.is_empty())
+            || self.explicit_interface
+            || self.explicit.iter().any(|&e| e);
         match (any, self.extrapolated.is_some()) {
             (true, false) => self.extrapolated = Some(path.committed.clone()),
             (false, true) => self.extrapolated = None,
@@ -627,6 +663,16 @@ impl<'a> Driver<'a> {
             for i in chosen {
                 ex.bulk[i] = laws[i].extrapolate(&ex.bulk[i], plan.scale);
             }
+            if self.explicit_interface {
+                let laws = &self.problem.laws.interfaces;
+                for (points, law) in ex.interface.chunks_mut(INTERFACE_POINTS).zip(laws) {
+                    if let Some(law) = law {
+                        for s in points {
+                            *s = law.extrapolate(s, plan.scale);
+                        }
+                    }
+                }
+            }
             for &(i, h) in held {
                 ex.interface[i].held = Some(h);
             }
@@ -640,8 +686,8 @@ impl<'a> Driver<'a> {
         mut path: Path,
         plan: &Plan,
         (u, lambda): (Vec<f64>, f64),
-        attempt: Attempt,
-        mut step_wall: WallTimes,
+        (attempt, impl_ex_residual): (Attempt, Option<f64>),
+        step_wall: WallTimes,
         observer: &mut dyn Observer,
     ) -> Result<Path, SolveError> {
         let loading = self.loading;
@@ -698,29 +744,20 @@ impl<'a> Driver<'a> {
         {
             self.switch_after(&mut path, plan);
         }
-        let impl_ex_residual = match self.extrapolated.as_mut() {
-            Some(scratch) => {
-                let t = Instant::now();
-                let e = implicit_residual(&mut self.ws, &path.committed, &path.u, scratch)?;
-                let spent = t.elapsed().as_secs_f64();
-                step_wall.constitutive += spent;
-                self.wall.constitutive += spent;
-                let summary = &mut path.summary;
-                summary.impl_ex_max_residual = summary.impl_ex_max_residual.max(e);
-                // A linear extrapolation's error grows like h² on a
-                // smooth history; near R1's adhesion peak it was closer to
-                // h (docs/solver.md), and the steps then shrink over
-                // several steps instead of one.
-                if e > self.settings.impl_ex_tolerance {
-                    let shrink = (self.settings.impl_ex_tolerance / e).sqrt() * 0.9;
-                    path.next_step = (plan.size * shrink.max(loading.cutback))
-                        .max(loading.min_step)
-                        .min(path.next_step);
-                }
-                Some(e)
+        if let Some(e) = impl_ex_residual {
+            let summary = &mut path.summary;
+            summary.impl_ex_max_residual = summary.impl_ex_max_residual.max(e);
+            // A linear extrapolation's error grows like h² on a
+            // smooth history; near R1's adhesion peak it was closer to
+            // h (docs/solver.md), and the steps then shrink over
+            // several steps instead of one.
+            if e > self.settings.impl_ex_tolerance {
+                let shrink = (self.settings.impl_ex_tolerance / e).sqrt() * 0.9;
+                path.next_step = (plan.size * shrink.max(loading.cutback))
+                    .max(loading.min_step)
+                    .min(path.next_step);
             }
-            None => None,
-        };
+        }
         self.finish(&mut path.summary);
         let h = path.next_step;
         let cp = || self.checkpoint(&path, h);
@@ -744,6 +781,42 @@ impl<'a> Driver<'a> {
         );
         self.ws.trial.clone_from(&path.committed);
         Ok(path)
+    }
+
+    /// The IMPL-EX error indicator of the converged iterate `u` (see
+    /// [`implicit_residual`]), `None` without explicit points; its time is
+    /// the constitutive phase's. Leaves the workspace's trial states and
+    /// internal forces (the step's answer) as they are.
+    fn extrapolation_error(
+        &mut self,
+        u: &[f64],
+        step_wall: &mut WallTimes,
+    ) -> Result<Option<f64>, SolveError> {
+        let Some(scratch) = self.extrapolated.as_mut() else {
+            return Ok(None);
+        };
+        let t = Instant::now();
+        let (trial, forces) = self
+            .indicator_trial
+            .get_or_insert_with(|| (self.ws.trial.clone(), self.ws.f_int.clone()));
+        std::mem::swap(&mut self.ws.trial, trial);
+        std::mem::swap(&mut self.ws.f_int, forces);
+        let e = implicit_residual(&mut self.ws, trial, u, scratch);
+        std::mem::swap(&mut self.ws.trial, trial);
+        std::mem::swap(&mut self.ws.f_int, forces);
+        let e = e?;
+        let spent = t.elapsed().as_secs_f64();
+        step_wall.constitutive += spent;
+        self.wall.constitutive += spent;
+        Ok(Some(e))
+    }
+
+    /// The smallest step of `plan`'s kind.
+    fn min_step(&self, path: &Path, plan: &Plan) -> f64 {
+        match plan.mode {
+            ControlMode::Energy => self.energy_floor(path),
+            _ => self.loading.min_step,
+        }
     }
 
     /// Reports the failed attempt and halves (by `loading.cutback`) the
@@ -801,10 +874,7 @@ impl<'a> Driver<'a> {
             path.next_step = released.max(self.energy_floor(&path));
             return Ok(Outcome::Continue(path));
         }
-        let min_step = match plan.mode {
-            ControlMode::Energy => self.energy_floor(&path),
-            _ => loading.min_step,
-        };
+        let min_step = self.min_step(&path, plan);
         if plan.size <= min_step * (1.0 + 1e-12) {
             if let Some(limit) = self.limit_load(&path, &reason) {
                 return Ok(Outcome::End(limit, path));
@@ -1319,11 +1389,12 @@ fn in_balance(
 }
 
 /// IMPL-EX error indicator of a converged step: the residual of the
-/// converged displacement `u` when every concrete point takes the damage
-/// its implicit history reached in the step instead of the extrapolated
-/// one (what an implicit Newton iteration would see there), relative to
+/// converged displacement `u` when every concrete point (and IMPL-EX
+/// interface point) takes the damage its implicit history reached in the
+/// step instead of the extrapolated one (what an implicit Newton iteration would see there), relative to
 /// the reaction like the force criterion. Overwrites `scratch` and the
-/// workspace's trial states and internal forces.
+/// workspace's trial states and internal forces (see
+/// `Driver::extrapolation_error`, which keeps the step's).
 fn implicit_residual(
     ws: &mut Workspace<'_>,
     committed: &States,
@@ -1333,6 +1404,9 @@ fn implicit_residual(
     scratch.clone_from(committed);
     for s in &mut scratch.bulk {
         s.explicit_damage = Some(s.damage);
+    }
+    for s in &mut scratch.interface {
+        s.explicit_lambda = s.explicit_lambda.map(|_| s.lambda_max);
     }
     let system: &System = ws.system;
     system.evaluate(

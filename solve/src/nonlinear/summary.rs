@@ -63,6 +63,10 @@ pub struct Summary {
     /// `SolverSettings::impl_ex_tolerance`); 0 for implicit integration.
     #[serde(default)]
     pub impl_ex_max_residual: f64,
+    /// IMPL-EX: converged steps redone shorter because their extrapolation
+    /// error was above `impl_ex_reject` × `impl_ex_tolerance`.
+    #[serde(default)]
+    pub impl_ex_rejections: usize,
     /// Tets whose damage is integrated explicitly (IMPL-EX): all under
     /// `concrete_integration: impl_ex`, else the degenerate ones
     /// (`solver.sliver_quality`).

@@ -198,7 +198,9 @@ pub struct RawSolver {
     pub preconditioner_precision: Option<Precision>,
     pub stagnation_acceptance: Option<f64>,
     pub concrete_integration: Option<ConcreteIntegration>,
+    pub interface_integration: Option<InterfaceIntegration>,
     pub impl_ex_tolerance: Option<f64>,
+    pub impl_ex_reject: Option<f64>,
     pub path_following: Option<PathFollowing>,
     pub sliver_quality: Option<f64>,
     pub interface_holds: Option<InterfaceHolds>,
@@ -265,6 +267,23 @@ pub enum ConcreteIntegration {
     /// within a step; the damage history is still integrated implicitly.
     /// First-order in the step size: its curve error is measured against
     /// the implicit one (docs/solver.md).
+    ImplEx,
+}
+
+/// Time integration of the interface damage (FCZM and Tvergaard λ̃).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum InterfaceIntegration {
+    /// Backward Euler: the traction of a step uses the damage of the
+    /// step's own jump (consistent tangent, softening where λ̃ grows).
+    #[default]
+    Implicit,
+    /// IMPL-EX, as `concrete_integration: impl_ex` for the concrete: the
+    /// traction uses λ̃ extrapolated linearly from the last converged step
+    /// (never below the last one), so the interface's damage does not
+    /// switch between Newton iterates and its tangent does not soften;
+    /// friction and contact stay implicit. The step control of
+    /// `impl_ex_tolerance` bounds its error (docs/solver.md).
     ImplEx,
 }
 
@@ -397,6 +416,10 @@ pub struct SolverSettings {
     /// form when implicit, so that specs without it keep their cache keys.
     #[serde(default, skip_serializing_if = "is_implicit")]
     pub concrete_integration: ConcreteIntegration,
+    /// Time integration of the interface damage. Left out of the
+    /// serialised form when implicit.
+    #[serde(default, skip_serializing_if = "is_implicit_interface")]
+    pub interface_integration: InterfaceIntegration,
     /// IMPL-EX step control: after a converged step, the residual of its
     /// displacement under the implicit damage, relative to the reaction,
     /// is compared with this; above it the next step shrinks by
@@ -407,6 +430,14 @@ pub struct SolverSettings {
         skip_serializing_if = "is_default_impl_ex_tolerance"
     )]
     pub impl_ex_tolerance: f64,
+    /// IMPL-EX: a converged step whose extrapolation error is above this
+    /// multiple of `impl_ex_tolerance` is redone shorter (a step in which
+    /// points start to damage has no increment to extrapolate from, and
+    /// its error is not bounded by the next step's size). `None`: every
+    /// converged step is kept. Default 2 under `interface_integration:
+    /// impl_ex`, else `None`; left out of the serialised form when `None`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub impl_ex_reject: Option<f64>,
     /// Which quantity a step prescribes after the first one. Left out of
     /// the serialised form at its default.
     #[serde(default, skip_serializing_if = "is_auto")]
@@ -490,6 +521,14 @@ fn is_implicit(c: &ConcreteIntegration) -> bool {
     *c == ConcreteIntegration::Implicit
 }
 
+fn is_implicit_interface(c: &InterfaceIntegration) -> bool {
+    *c == InterfaceIntegration::Implicit
+}
+
+/// Default of `solver.impl_ex_reject` under `interface_integration:
+/// impl_ex` (docs/solver.md, "IMPL-EX interface").
+pub const DEFAULT_IMPL_EX_REJECT: f64 = 2.0;
+
 /// Default of `solver.impl_ex_tolerance` (docs/solver.md, IMPL-EX).
 pub const DEFAULT_IMPL_EX_TOLERANCE: f64 = 1e-2;
 
@@ -520,7 +559,9 @@ impl Default for SolverSettings {
             preconditioner_precision: Precision::Single,
             stagnation_acceptance: 1.0,
             concrete_integration: ConcreteIntegration::Implicit,
+            interface_integration: InterfaceIntegration::Implicit,
             impl_ex_tolerance: DEFAULT_IMPL_EX_TOLERANCE,
+            impl_ex_reject: None,
             path_following: PathFollowing::Auto,
             sliver_quality: 0.0,
             interface_holds: InterfaceHolds::OnStall,
@@ -612,6 +653,9 @@ impl RawSolver {
                 }
             },
             concrete_integration: self.concrete_integration.unwrap_or(d.concrete_integration),
+            interface_integration: self
+                .interface_integration
+                .unwrap_or(d.interface_integration),
             impl_ex_tolerance: {
                 let v = self.impl_ex_tolerance.unwrap_or(d.impl_ex_tolerance);
                 if v.is_finite() && v > 0.0 {
@@ -623,6 +667,18 @@ impl RawSolver {
                         bound: "must be > 0",
                     });
                 }
+            },
+            impl_ex_reject: match self.impl_ex_reject {
+                Some(v) if v.is_nan() || v < 1.0 => {
+                    return Err(SolverSpecError::OutOfRange {
+                        key: "solver.impl_ex_reject".into(),
+                        value: v,
+                        bound: "must be ≥ 1 (a multiple of impl_ex_tolerance)",
+                    });
+                }
+                Some(v) => Some(v),
+                None => (self.interface_integration == Some(InterfaceIntegration::ImplEx))
+                    .then_some(DEFAULT_IMPL_EX_REJECT),
             },
             path_following: self.path_following.unwrap_or(d.path_following),
             sliver_quality: in_unit_interval(
@@ -667,6 +723,35 @@ mod tests {
             serde_json::to_string(&InterfaceHolds::OnStall).unwrap(),
             "\"on_stall\""
         );
+    }
+
+    /// IMPL-EX rejection: on by default only with the interface IMPL-EX
+    /// (concrete-only IMPL-EX runs keep every converged step, as before),
+    /// settable, and a bound below the tolerance itself is refused.
+    #[test]
+    fn impl_ex_reject_defaults_with_the_interface_integration() {
+        let resolve = |y: &str| serde_yaml::from_str::<RawSolver>(y).unwrap().resolve();
+        assert_eq!(resolve("{}").unwrap().impl_ex_reject, None);
+        let concrete = resolve("concrete_integration: impl_ex").unwrap();
+        assert_eq!(concrete.impl_ex_reject, None);
+        let interface = resolve("interface_integration: impl_ex").unwrap();
+        assert_eq!(
+            interface.interface_integration,
+            InterfaceIntegration::ImplEx
+        );
+        assert_eq!(interface.impl_ex_reject, Some(DEFAULT_IMPL_EX_REJECT));
+        let set = resolve("concrete_integration: impl_ex\nimpl_ex_reject: 4").unwrap();
+        assert_eq!(set.impl_ex_reject, Some(4.0));
+        for bad in ["0.5", ".nan"] {
+            let e = resolve(&format!("impl_ex_reject: {bad}"))
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains("solver.impl_ex_reject"), "{e}");
+        }
+        let e = serde_yaml::from_str::<RawSolver>("interface_integration: explicit")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("impl_ex"), "{e}");
     }
 
     #[test]
