@@ -473,7 +473,7 @@ impl<'a> Driver<'a> {
         let mut held: Vec<(usize, HeldHistory)> = Vec::new();
         let mut retries = 0;
         self.ws.holds_pairs = self.holds_pairs(&path);
-        let (attempt, u_trial, lambda) = loop {
+        let (mut attempt, u_trial, lambda) = loop {
             self.prepare_start(&path, &plan, &flipped, &held);
             let (mut u_trial, mut control) = Self::predict(
                 (&self.fed, &self.rates),
@@ -554,21 +554,12 @@ impl<'a> Driver<'a> {
         summary.factorisations = self.ws.lin.factorisations;
         summary.pcg_iterations = self.ws.lin.pcg_iterations;
         summary.krylov_iterations = self.ws.lin.krylov_iterations;
-        let mut attempt = attempt;
         let impl_ex_residual = match attempt.failure {
             None => self.extrapolation_error(&u_trial, &mut step_wall)?,
             Some(_) => None,
         };
-        if let (Some(e), Some(reject)) = (impl_ex_residual, self.settings.impl_ex_reject) {
-            let limit = reject * self.settings.impl_ex_tolerance;
-            if e > limit && plan.size > self.min_step(&path, &plan) * (1.0 + 1e-12) {
-                path.summary.impl_ex_rejections += 1;
-                path.summary.impl_ex_max_residual = path.summary.impl_ex_max_residual.max(e);
-                attempt.failure = Some(StepFailure::ExtrapolationError {
-                    indicator: e,
-                    limit,
-                });
-            }
+        if let Some(e) = impl_ex_residual {
+            attempt.failure = self.rejection(&mut path, &plan, e);
         }
         if attempt.failure.is_none() {
             let path = self.commit(
@@ -817,6 +808,22 @@ impl<'a> Driver<'a> {
         step_wall.constitutive += spent;
         self.wall.constitutive += spent;
         Ok(Some(e))
+    }
+
+    /// The failure that sends a converged step back when its IMPL-EX
+    /// error `e` passes `impl_ex_reject` × the tolerance (never at the
+    /// minimum step, which cannot be shortened), counted in the summary.
+    fn rejection(&self, path: &mut Path, plan: &Plan, e: f64) -> Option<StepFailure> {
+        let limit = self.settings.impl_ex_reject? * self.settings.impl_ex_tolerance;
+        if e <= limit || plan.size <= self.min_step(path, plan) * (1.0 + 1e-12) {
+            return None;
+        }
+        path.summary.impl_ex_rejections += 1;
+        path.summary.impl_ex_max_residual = path.summary.impl_ex_max_residual.max(e);
+        Some(StepFailure::ExtrapolationError {
+            indicator: e,
+            limit,
+        })
     }
 
     /// The smallest step of `plan`'s kind.

@@ -668,18 +668,7 @@ impl RawSolver {
                     });
                 }
             },
-            impl_ex_reject: match self.impl_ex_reject {
-                Some(v) if v.is_nan() || v < 1.0 => {
-                    return Err(SolverSpecError::OutOfRange {
-                        key: "solver.impl_ex_reject".into(),
-                        value: v,
-                        bound: "must be ≥ 1 (a multiple of impl_ex_tolerance)",
-                    });
-                }
-                Some(v) => Some(v),
-                None => (self.interface_integration == Some(InterfaceIntegration::ImplEx))
-                    .then_some(DEFAULT_IMPL_EX_REJECT),
-            },
+            impl_ex_reject: self.impl_ex_reject()?,
             path_following: self.path_following.unwrap_or(d.path_following),
             sliver_quality: in_unit_interval(
                 "solver.sliver_quality",
@@ -698,6 +687,25 @@ impl RawSolver {
                 p
             },
         })
+    }
+}
+
+impl RawSolver {
+    /// `impl_ex_reject` as given (≥ 1), else its default: on with the
+    /// interface IMPL-EX, off otherwise.
+    fn impl_ex_reject(&self) -> Result<Option<f64>, SolverSpecError> {
+        match self.impl_ex_reject {
+            Some(v) if v.is_nan() || v < 1.0 => Err(SolverSpecError::OutOfRange {
+                key: "solver.impl_ex_reject".into(),
+                value: v,
+                bound: "must be ≥ 1 (a multiple of impl_ex_tolerance)",
+            }),
+            Some(v) => Ok(Some(v)),
+            None => Ok(
+                (self.interface_integration == Some(InterfaceIntegration::ImplEx))
+                    .then_some(DEFAULT_IMPL_EX_REJECT),
+            ),
+        }
     }
 }
 
