@@ -726,13 +726,15 @@ impl<'a> Driver<'a> {
             path.next_step = (plan.size * loading.growth)
                 .min(loading.max_step)
                 .max(path.next_step);
-        } else if attempt.force_only {
-            // Ended on its best iterate (points chattering between law
-            // branches): the chatter, not the step, sets the residual
-            // (R2's floors did not shrink from 20 nm to 1 nm), so keeping
-            // the size would crawl; the next step grows as after an easy
-            // one, and a failure cuts it back (docs/solver.md, "IMPL-EX
-            // interface").
+        } else if attempt.force_only && self.explicit_interface {
+            // Ended on its best iterate (friction points chattering; the
+            // interface's damage is explicit): the chatter, not the step,
+            // sets the residual (R2's floors did not shrink from 20 nm to
+            // 1 nm), so keeping the size would crawl; the next step grows
+            // as after an easy one, and a failure cuts it back. Not for
+            // the implicit interface: there it moved the stress sweep's
+            // splitting cubes onto other branches and stalled case 52
+            // (docs/solver.md, "IMPL-EX interface").
             path.next_step = (plan.size * loading.growth).min(loading.max_step);
         } else {
             path.next_step = plan.size;
