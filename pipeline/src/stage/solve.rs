@@ -148,15 +148,10 @@ impl Observer for StageObserver<'_> {
             r.iterations
         ));
         let t = &report.times;
-        let residuals: Vec<String> = report
-            .residual_history
-            .iter()
-            .map(|v| format!("{v:.2e}"))
-            .collect();
         self.ctx.printer.detail(&format!(
             "solve:   step size {:.3e} m; relative residuals [{}]{}{}; assembly {:.2} s, constitutive {:.2} s, factorisation {:.2} s, linear solve {:.2} s",
             report.step_size,
-            residuals.join(", "),
+            residual_list(&report.residual_history),
             if report.force_only {
                 " (stagnating: ended on the best iterate)"
             } else {
@@ -292,17 +287,21 @@ impl Observer for StageObserver<'_> {
             "step {} at u = {:.4e} m: {}; step {:.3e} → {:.3e} m",
             event.step, event.u_imposed, event.reason, event.failed_step_size, event.next_step_size
         );
-        let residuals: Vec<String> = event
-            .residual_history
-            .iter()
-            .map(|v| format!("{v:.2e}"))
-            .collect();
         self.ctx.printer.detail(&format!(
             "solve: cut back: {text}; relative residuals [{}]",
-            residuals.join(", ")
+            residual_list(&event.residual_history)
         ));
         self.cutbacks.push(text);
     }
+}
+
+/// Relative residuals as `-v` prints them: three digits each.
+fn residual_list(history: &[f64]) -> String {
+    history
+        .iter()
+        .map(|v| format!("{v:.2e}"))
+        .collect::<Vec<_>>()
+        .join(", ")
 }
 
 pub fn run(ctx: &Ctx, out: &Path) -> Result<()> {
