@@ -802,7 +802,7 @@ impl<'a> Driver<'a> {
             .get_or_insert_with(|| (self.ws.trial.clone(), self.ws.f_int.clone()));
         std::mem::swap(&mut self.ws.trial, trial);
         std::mem::swap(&mut self.ws.f_int, forces);
-        let e = implicit_residual(&mut self.ws, trial, u, scratch);
+        let e = implicit_residual(&mut self.ws, (trial, &self.explicit), u, scratch);
         std::mem::swap(&mut self.ws.trial, trial);
         std::mem::swap(&mut self.ws.f_int, forces);
         let e = e?;
@@ -1408,17 +1408,22 @@ fn in_balance(
 /// IMPL-EX error indicator of a converged step: the residual of the
 /// converged displacement `u` when every concrete point (and IMPL-EX
 /// interface point) takes the damage its implicit history reached in the
-/// step instead of the extrapolated one (what an implicit Newton iteration would see there), relative to
-/// the reaction like the force criterion. Overwrites `scratch` and the
+/// step instead of the extrapolated one (what an implicit Newton
+/// iteration would see there), relative to the reaction like the force
+/// criterion. `explicit`: the tets integrated explicitly for the whole
+/// run (see `release_retried`). Overwrites `scratch` and the
 /// workspace's trial states and internal forces (see
 /// `Driver::extrapolation_error`, which keeps the step's).
 fn implicit_residual(
     ws: &mut Workspace<'_>,
-    committed: &States,
+    (converged, explicit): (&States, &[bool]),
     u: &[f64],
     scratch: &mut States,
 ) -> Result<f64, AssemblyError> {
-    scratch.clone_from(committed);
+    // The states as the commit leaves them (retried tets and held points
+    // released to the larger damage).
+    scratch.clone_from(converged);
+    release_retried(scratch, explicit);
     for s in &mut scratch.bulk {
         s.explicit_damage = Some(s.damage);
     }
