@@ -732,8 +732,7 @@ impl<'a> Driver<'a> {
             // sets the residual (R2's floors did not shrink from 20 nm to
             // 1 nm), so keeping the size would crawl; the next step grows
             // as after an easy one, and a failure cuts it back. Not for
-            // the implicit interface: there it moved the stress sweep's
-            // splitting cubes onto other branches and stalled case 52
+            // the implicit interface, whose runs keep their curves
             // (docs/solver.md, "IMPL-EX interface").
             path.next_step = (plan.size * loading.growth).min(loading.max_step);
         } else {
