@@ -41,8 +41,8 @@
 use super::coulomb::slip_return;
 use super::tvergaard::opening;
 use super::{
-    check_finite, check_result, explicit_lambda, extrapolated_lambda, InterfaceLaw,
-    InterfaceResponse, InterfaceState, LawError, TangentKind,
+    check_finite, check_result, extrapolated_lambda, lambda_step, InterfaceLaw, InterfaceResponse,
+    InterfaceState, LambdaStep, LawError, TangentKind,
 };
 use nalgebra::{Matrix3, Vector2, Vector3};
 use serde::{Deserialize, Serialize};
@@ -167,8 +167,8 @@ struct Undamaged {
 }
 
 impl Fczm {
-    /// The damage the traction uses and the step's implicit λ̃ (m), the
-    /// state's. `evolve`: whether λ̃ may grow (false: held, see
+    /// The damage the traction uses and the step's λ̃ (the state's is
+    /// the implicit one). `evolve`: whether λ̃ may grow (false: held, see
     /// `held_step`). Under IMPL-EX the traction's damage is that of the
     /// extrapolated λ̃, fixed within the step (no derivative).
     fn damage(
@@ -176,18 +176,11 @@ impl Fczm {
         committed: &InterfaceState,
         jump: &Vector3<f64>,
         evolve: bool,
-    ) -> (Damage, f64) {
+    ) -> (Damage, LambdaStep) {
         let c = self.tensile_strength / (self.zeta * self.fracture_energy);
         let (lam, dlam) = opening(jump, self.delta_s);
-        let growing = evolve && lam - self.lambda0 > committed.lambda_max;
-        let implicit = if growing {
-            lam - self.lambda0
-        } else {
-            committed.lambda_max.max(0.0)
-        };
-        let explicit = explicit_lambda(committed, evolve);
-        let loading = growing && explicit.is_none();
-        let lt = explicit.unwrap_or(implicit);
+        let step = lambda_step(committed, lam, self.lambda0, evolve);
+        let (lt, loading) = (step.traction, step.loading);
         let big = lt + self.lambda0;
         let dbig = if loading { dlam } else { Vector3::zeros() };
         let q_nat = (-c * lt).exp();
@@ -216,7 +209,7 @@ impl Fczm {
             floor_q,
             c,
         };
-        (damage, implicit)
+        (damage, step)
     }
 
     /// D (22) at λ̃ = `lt` (m), never below `min_damage`.
@@ -311,7 +304,8 @@ impl InterfaceLaw for Fczm {
         let un = jump[0];
         let us = Vector2::new(jump[1], jump[2]);
 
-        let (dmg, implicit) = self.damage(committed, jump, evolve);
+        let (dmg, step) = self.damage(committed, jump, evolve);
+        let implicit = step.implicit;
         let Damage { lt, d, dd, .. } = dmg;
 
         // Damaged part: no tension, Coulomb friction (16–21).
@@ -384,7 +378,7 @@ impl InterfaceLaw for Fczm {
                 slip: [ret.slip[0], ret.slip[1]],
                 held: None,
                 explicit_lambda: committed.explicit_lambda,
-                lambda_increment: implicit - committed.lambda_max.max(0.0),
+                lambda_increment: step.increment,
             },
         })
     }

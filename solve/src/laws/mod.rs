@@ -113,14 +113,42 @@ pub struct InterfaceState {
     pub lambda_increment: f64,
 }
 
-/// The λ̃ (m) a damage interface law's traction takes from the solver's
-/// extrapolation: `Some` while the history evolves under IMPL-EX, never
-/// below the committed λ̃.
-pub(crate) fn explicit_lambda(committed: &InterfaceState, evolve: bool) -> Option<f64> {
-    committed
+/// λ̃ (m) of a damage interface law's step at the equivalent opening
+/// `lam` (A.2) from `committed`.
+pub(crate) struct LambdaStep {
+    /// The step's own λ̃ (the state's).
+    pub implicit: f64,
+    /// The λ̃ the traction uses: the implicit one, or under IMPL-EX the
+    /// solver's extrapolation (never below the committed λ̃).
+    pub traction: f64,
+    /// Whether the traction's λ̃ grows with the jump (its tangent then
+    /// carries ∂λ/∂u).
+    pub loading: bool,
+    /// Increment of the implicit λ̃ over the committed one (the state's
+    /// `lambda_increment`).
+    pub increment: f64,
+}
+
+/// See [`LambdaStep`]; `evolve`: whether λ̃ may grow (false: held).
+pub(crate) fn lambda_step(
+    committed: &InterfaceState,
+    lam: f64,
+    lambda0: f64,
+    evolve: bool,
+) -> LambdaStep {
+    let start = committed.lambda_max.max(0.0);
+    let growing = evolve && lam - lambda0 > committed.lambda_max;
+    let implicit = if growing { lam - lambda0 } else { start };
+    let explicit = committed
         .explicit_lambda
         .filter(|_| evolve)
-        .map(|l| l.max(committed.lambda_max.max(0.0)))
+        .map(|l| l.max(start));
+    LambdaStep {
+        implicit,
+        traction: explicit.unwrap_or(implicit),
+        loading: growing && explicit.is_none(),
+        increment: implicit - start,
+    }
 }
 
 /// The committed state with λ̃ extrapolated linearly over a step `ratio`

@@ -20,8 +20,8 @@
 //! metal", Mater. Sci. Eng. A 125 (1990); Abbas, Bary, Jason (2023) App. A.
 
 use super::{
-    check_finite, check_result, explicit_lambda, extrapolated_lambda, InterfaceLaw,
-    InterfaceResponse, InterfaceState, LawError, TangentKind,
+    check_finite, check_result, extrapolated_lambda, lambda_step, InterfaceLaw, InterfaceResponse,
+    InterfaceState, LawError, TangentKind,
 };
 use nalgebra::{Matrix3, Vector3};
 use serde::{Deserialize, Serialize};
@@ -77,17 +77,10 @@ impl InterfaceLaw for Tvergaard {
         let (kn, ks) = (self.normal_stiffness(), self.shear_stiffness());
         let c = self.tensile_strength / self.fracture_energy;
         let (lam, dlam) = opening(jump, self.delta_s);
-        let growing = evolve && lam - self.lambda0 > committed.lambda_max;
-        let implicit = if growing {
-            lam - self.lambda0
-        } else {
-            committed.lambda_max.max(0.0)
-        };
         // Under IMPL-EX the traction takes the extrapolated λ̃, fixed in
         // the step; the state follows the implicit one.
-        let explicit = explicit_lambda(committed, evolve);
-        let loading = growing && explicit.is_none();
-        let lt = explicit.unwrap_or(implicit);
+        let step = lambda_step(committed, lam, self.lambda0, evolve);
+        let (lt, loading, implicit) = (step.traction, step.loading, step.implicit);
         let big = lt + self.lambda0;
         let s = self.lambda0 / big * (-c * lt).exp();
         let open = jump[0] >= 0.0;
@@ -121,7 +114,7 @@ impl InterfaceLaw for Tvergaard {
                 slip: committed.slip,
                 held: None,
                 explicit_lambda: committed.explicit_lambda,
-                lambda_increment: implicit - committed.lambda_max.max(0.0),
+                lambda_increment: step.increment,
             },
         })
     }
