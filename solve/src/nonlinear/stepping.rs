@@ -816,7 +816,7 @@ impl<'a> Driver<'a> {
     /// minimum step, which cannot be shortened), counted in the summary.
     fn rejection(&self, path: &mut Path, plan: &Plan, e: f64) -> Option<StepFailure> {
         let limit = self.settings.impl_ex_reject? * self.settings.impl_ex_tolerance;
-        if e <= limit || plan.size <= self.min_step(path, plan) * (1.0 + 1e-12) {
+        if e <= limit || self.at_min_step(path, plan) {
             return None;
         }
         path.summary.impl_ex_rejections += 1;
@@ -825,6 +825,12 @@ impl<'a> Driver<'a> {
             indicator: e,
             limit,
         })
+    }
+
+    /// Whether `plan` is a step of the smallest size of its kind (which
+    /// cannot be shortened).
+    fn at_min_step(&self, path: &Path, plan: &Plan) -> bool {
+        plan.size <= self.min_step(path, plan) * (1.0 + 1e-12)
     }
 
     /// The smallest step of `plan`'s kind.
@@ -871,7 +877,7 @@ impl<'a> Driver<'a> {
         // its curve; `energy` at the first failure.
         let hand_over = match self.settings.path_following {
             PathFollowing::Energy => true,
-            PathFollowing::Auto => plan.size <= loading.min_step * (1.0 + 1e-12),
+            PathFollowing::Auto => self.at_min_step(&path, plan),
             _ => false,
         };
         if hand_over
@@ -891,7 +897,7 @@ impl<'a> Driver<'a> {
             return Ok(Outcome::Continue(path));
         }
         let min_step = self.min_step(&path, plan);
-        if plan.size <= min_step * (1.0 + 1e-12) {
+        if self.at_min_step(&path, plan) {
             if let Some(limit) = self.limit_load(&path, &reason) {
                 return Ok(Outcome::End(limit, path));
             }
