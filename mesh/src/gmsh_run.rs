@@ -39,49 +39,48 @@ pub struct GmshTiming {
 }
 
 /// The command-line arguments that mesh `geo` into `out_msh` with `spec`.
-/// Options go through `-string` (read before the `.geo`, so the `.geo` must
-/// not set them itself); sizes through `-setnumber` on the `.geo`'s
-/// `DefineConstant`s `h_interface`, `h_outer` and, when set, `h_bar_core` (m).
+/// Options and sizes go through `-setnumber` (read before the `.geo`, so
+/// the `.geo` must not set the options itself; the sizes are its
+/// `DefineConstant`s `h_interface`, `h_outer` and, when set, `h_bar_core`,
+/// m). Not `-string`: gmsh parses that through one temporary file per user
+/// (`~/.gmsh-tmp`, written, read, removed), so two gmsh runs at once (a
+/// study's cases, parallel tests) can take each other's file or find it
+/// gone and mesh with gmsh's default options (Delaunay instead of HXT, no
+/// optimisation): seen as one of four concurrent mesh tests meshing a
+/// different mesh from the same `.geo`.
 pub fn gmsh_args(geo: &Path, spec: &MeshSpec, out_msh: &Path) -> Vec<String> {
     let (opt, netgen) = match spec.optimize {
         Optimize::None => (0, 0),
         Optimize::Gmsh => (1, 0),
         Optimize::Netgen => (1, 1),
     };
-    let options = format!(
-        "Mesh.Algorithm3D={};Mesh.Optimize={};Mesh.OptimizeNetgen={};General.NumThreads={};Mesh.ElementOrder=1;",
-        spec.algorithm_3d.gmsh_id(),
-        opt,
-        netgen,
-        spec.threads
-    );
-    let mut args = vec![
-        geo.display().to_string(),
-        "-3".into(),
-        "-string".into(),
-        options,
-        "-setnumber".into(),
-        "h_interface".into(),
-        format!("{:e}", spec.h_interface),
-        "-setnumber".into(),
-        "h_outer".into(),
-        format!("{:e}", spec.h_outer),
+    let mut args = vec![geo.display().to_string()];
+    if let Some(h) = spec.h_bar_core {
+        args.extend([
+            "-setnumber".to_string(),
+            "h_bar_core".into(),
+            format!("{h:e}"),
+        ]);
+    }
+    args.push("-3".into());
+    for (name, value) in [
+        ("Mesh.Algorithm3D", spec.algorithm_3d.gmsh_id().to_string()),
+        ("Mesh.Optimize", opt.to_string()),
+        ("Mesh.OptimizeNetgen", netgen.to_string()),
+        ("General.NumThreads", spec.threads.to_string()),
+        ("Mesh.ElementOrder", "1".to_string()),
+        ("h_interface", format!("{:e}", spec.h_interface)),
+        ("h_outer", format!("{:e}", spec.h_outer)),
+    ] {
+        args.extend(["-setnumber".to_string(), name.to_string(), value]);
+    }
+    args.extend([
         "-format".into(),
         "msh41".into(),
         "-bin".into(),
         "-o".into(),
         out_msh.display().to_string(),
-    ];
-    if let Some(h) = spec.h_bar_core {
-        args.splice(
-            1..1,
-            [
-                "-setnumber".to_string(),
-                "h_bar_core".into(),
-                format!("{h:e}"),
-            ],
-        );
-    }
+    ]);
     args
 }
 
