@@ -135,7 +135,7 @@ impl EntityFacts {
     }
 }
 
-/// Python (gmsh API) shared by the geometry stage's measurement and the
+/// Python (gmsh API) shared by the measurement of the built model (`crate::occ`) and the
 /// failure diagnosis: `parametric_gap(tag)` is the worst gap, in the
 /// parameter space of periodic surface `tag`, between the ends of two of its
 /// boundary curves at one model point (a [`ParametricGap`] as a dict), and

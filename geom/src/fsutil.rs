@@ -5,6 +5,14 @@
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
+/// A scratch file name `.{stem}-{pid}-{n}.{ext}` in `dir`, distinct for
+/// every call in this process (threads may share a directory).
+pub fn scratch_name(dir: &Path, stem: &str, ext: &str) -> PathBuf {
+    static NEXT: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let n = NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    dir.join(format!(".{stem}-{}-{n}.{ext}", std::process::id()))
+}
+
 /// A temporary sibling of `path`, unique per process, keeping the extension
 /// (tools that pick a format from the name still see it).
 pub fn temp_sibling(path: &Path) -> PathBuf {

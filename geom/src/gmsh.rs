@@ -271,7 +271,7 @@ impl Gmsh {
             path: workdir.to_path_buf(),
             source,
         })?;
-        let file = workdir.join(format!(".gmsh-api-{}.py", std::process::id()));
+        let file = crate::fsutil::scratch_name(workdir, "gmsh-api", "py");
         std::fs::write(&file, script).map_err(|source| GmshError::Io {
             path: file.clone(),
             source,

@@ -5,8 +5,7 @@
 //! use geom::spec::{resolve, RawBar, RawSpecimen};
 //! let bar: RawBar = serde_yaml::from_str("{kind: ribbed, diameter: 8 mm}").unwrap();
 //! let (bar, specimen) = resolve(&bar, &RawSpecimen::default()).unwrap();
-//! let gmsh = geom::gmsh::Gmsh::locate().unwrap();
-//! let report = geom::build_geometry(&bar, &specimen, &gmsh, std::path::Path::new("work/r1")).unwrap();
+//! let report = geom::build_geometry(&bar, &specimen, std::path::Path::new("work/r1")).unwrap();
 //! println!("f_R = {:.3}", report.f_r);
 //! ```
 
@@ -17,6 +16,7 @@ pub mod geo;
 pub mod gmsh;
 pub mod layout;
 pub mod metrics;
+pub mod occ;
 pub mod spec;
 pub mod units;
 

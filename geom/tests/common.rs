@@ -35,3 +35,18 @@ pub fn scratch(name: &str) -> PathBuf {
     std::fs::create_dir_all(&dir).unwrap();
     dir
 }
+
+/// The geometry stage's report and gmsh's OpenCASCADE model of its script
+/// measured against it (as the mesh stage measures it before meshing).
+#[allow(dead_code)]
+pub fn build_and_measure(
+    bar: &Bar,
+    specimen: &Specimen,
+    dir: &std::path::Path,
+) -> (geom::GeometryReport, geom::occ::OccReport) {
+    let gmsh = geom::gmsh::Gmsh::locate().expect("gmsh (run scripts/setup.sh)");
+    let report = geom::build_geometry(bar, specimen, dir).unwrap_or_else(|e| panic!("{e}"));
+    let occ = geom::occ::measure(&gmsh, bar, specimen, &dir.join("specimen.geo"), dir)
+        .unwrap_or_else(|e| panic!("{e}"));
+    (report, occ)
+}

@@ -4,12 +4,10 @@ mod common;
 
 use geom::gmsh::Gmsh;
 
-fn build(name: &str) -> geom::GeometryReport {
+fn build(name: &str) -> (geom::GeometryReport, geom::occ::OccReport) {
     let (bar, specimen) = common::load_spec(name);
-    let gmsh = Gmsh::locate().expect("gmsh (run scripts/setup.sh)");
     let dir = common::scratch(name);
-    let report = geom::build_geometry(&bar, &specimen, &gmsh, &dir)
-        .unwrap_or_else(|e| panic!("{name}: {e}"));
+    let (report, occ) = common::build_and_measure(&bar, &specimen, &dir);
     assert!(dir.join("specimen.geo").is_file() && dir.join("geometry.json").is_file());
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join("geometry.json")).unwrap()).unwrap();
@@ -24,20 +22,26 @@ fn build(name: &str) -> geom::GeometryReport {
     ] {
         assert!(json.get(key).is_some(), "{name}: geometry.json lacks {key}");
     }
-    for (q, c) in &report.checks {
+    for (q, c) in report.checks.iter().chain(&occ.checks) {
         assert!(c.agree && c.max_rel_diff <= 0.01, "{name}: {q} {c:?}");
     }
+    // The stage's two ways and gmsh's are the same quantities.
+    assert_eq!(
+        report.checks.keys().collect::<Vec<_>>(),
+        occ.checks.keys().collect::<Vec<_>>()
+    );
+    assert!(occ.checks.values().all(|c| c.gmsh_occ.is_some()));
     eprintln!(
         "{name}: f_R {:.4}, ribs {}, gmsh {:.1} s, checks {:?}",
-        report.f_r, report.rib_count, report.gmsh_build_seconds, report.checks
+        report.f_r, report.rib_count, occ.build_seconds, occ.checks
     );
-    report
+    (report, occ)
 }
 
 /// R1 builds; f_R meets EN 1992-1-1's minimum for 6.5–12 mm bars and the three-way checks agree within 1 % (SPEC §3, issue 2).
 #[test]
 fn r1_builds() {
-    let r = build("r1");
+    let (r, _) = build("r1");
     assert!(r.f_r >= 0.040 && r.f_r < 0.2, "{}", r.f_r);
     assert!(r.checks.contains_key("rib_volume_m3"));
 }
@@ -45,7 +49,7 @@ fn r1_builds() {
 /// R1-coarse has R1's bar and specimen (SPEC §2).
 #[test]
 fn r1_coarse_builds_like_r1() {
-    let r = build("r1-coarse");
+    let (r, _) = build("r1-coarse");
     let (b1, s1) = common::load_spec("r1");
     assert_eq!((r.bar, r.specimen), (b1, s1));
 }
@@ -53,7 +57,7 @@ fn r1_coarse_builds_like_r1() {
 /// R2 builds; f_R meets EN 1992-1-1's minimum 0.056 for bars above 12 mm (SPEC §3).
 #[test]
 fn r2_builds() {
-    let r = build("r2");
+    let (r, _) = build("r2");
     assert!(r.f_r >= 0.056 && r.f_r < 0.2, "{}", r.f_r);
 }
 
@@ -64,7 +68,7 @@ fn smooth_scenes_build() {
         ("smooth-80", 8e-3, 80e-3, 40e-3),
         ("smooth-125", 10e-3, 125e-3, 62.5e-3),
     ] {
-        let r = build(name);
+        let (r, occ) = build(name);
         assert_eq!(r.rib_count, 0);
         let expect = std::f64::consts::PI * d * l_adh;
         assert!(
@@ -73,7 +77,7 @@ fn smooth_scenes_build() {
         );
         let free = std::f64::consts::PI * d * (l - l_adh);
         assert!(
-            (r.checks["interface_area_free_m2"].gmsh_occ - free).abs() < 1e-6 * free,
+            (occ.checks["interface_area_free_m2"].gmsh_occ.unwrap() - free).abs() < 1e-6 * free,
             "{name}"
         );
     }
@@ -84,13 +88,13 @@ fn smooth_scenes_build() {
 fn full_adhesive_length_builds() {
     let (bar, mut specimen) = common::load_spec("smooth-125");
     specimen.adhesive_length = specimen.cube_side;
-    let gmsh = Gmsh::locate().expect("gmsh (run scripts/setup.sh)");
     let dir = common::scratch("smooth-125-full");
-    let r = geom::build_geometry(&bar, &specimen, &gmsh, &dir).unwrap();
-    assert_eq!(r.group_entities["interface_free"], 0);
+    let (r, occ) = common::build_and_measure(&bar, &specimen, &dir);
+    assert_eq!(occ.group_entities["interface_free"], 0);
     assert!(r.interface_area_free_m2.abs() < 1e-12);
     let expect = std::f64::consts::PI * 10e-3 * 125e-3;
-    assert!((r.checks["interface_area_adhesive_m2"].gmsh_occ - expect).abs() < 1e-6 * expect);
+    let occ_area = occ.checks["interface_area_adhesive_m2"].gmsh_occ.unwrap();
+    assert!((occ_area - expect).abs() < 1e-6 * expect);
 }
 
 /// A rib design OCC is asked to build goes through gmsh, and a broken script fails with gmsh's message, not a panic (SPEC §8).

@@ -3,7 +3,6 @@
 
 mod common;
 
-use geom::gmsh::Gmsh;
 use geom::spec::{resolve, RawBar, RawSpecimen, Symmetry};
 use std::f64::consts::PI;
 
@@ -18,22 +17,21 @@ fn quarter_smooth80_builds_with_whole_specimen_metrics() {
         Symmetry::Quarter,
         "auto is quarter for a smooth bar"
     );
-    let gmsh = Gmsh::locate().expect("gmsh (run scripts/setup.sh)");
     let dir = common::scratch("smooth-80-quarter");
-    let r = geom::build_geometry(&bar, &specimen, &gmsh, &dir).unwrap_or_else(|e| panic!("{e}"));
+    let (r, occ) = common::build_and_measure(&bar, &specimen, &dir);
     assert_eq!(r.symmetry, Symmetry::Quarter);
     assert_eq!(r.modelled_fraction, 0.25);
     for g in ["symmetry_x", "symmetry_y"] {
-        assert!(r.group_entities[g] > 0, "{g}: {:?}", r.group_entities);
+        assert!(occ.group_entities[g] > 0, "{g}: {:?}", occ.group_entities);
     }
     let (d, l, l_adh) = (8e-3, 80e-3, 40e-3);
     let adh = PI * d * l_adh;
     assert!((r.interface_area_adhesive_m2 - adh).abs() < 1e-9 * adh);
-    for (q, c) in &r.checks {
+    for (q, c) in r.checks.iter().chain(&occ.checks) {
         assert!(c.agree && c.max_rel_diff <= 0.01, "{q}: {c:?}");
     }
     // OCC's quarter surfaces and volumes are exact: ×4 they are the whole ones.
-    let gm = |q: &str| r.checks[q].gmsh_occ;
+    let gm = |q: &str| occ.checks[q].gmsh_occ.unwrap();
     assert!((gm("interface_area_adhesive_m2") - adh).abs() < 1e-6 * adh);
     let free = PI * d * (l - l_adh);
     assert!((gm("interface_area_free_m2") - free).abs() < 1e-6 * free);
@@ -65,12 +63,11 @@ fn full_smooth_model_has_no_mirror_groups() {
     let geo = geom::geo::write_geo(&layout_f);
     assert!(!geo.contains("symmetry_x") && !geo.contains("BooleanIntersection"));
     assert!(geom::geo::write_geo(&layout_q).contains("BooleanIntersection"));
-    let gmsh = Gmsh::locate().expect("gmsh (run scripts/setup.sh)");
     let dir = common::scratch("smooth-80-full");
-    let r = geom::build_geometry(&bar, &specimen, &gmsh, &dir).unwrap_or_else(|e| panic!("{e}"));
+    let (r, occ) = common::build_and_measure(&bar, &specimen, &dir);
     assert_eq!((r.symmetry, r.modelled_fraction), (Symmetry::Full, 1.0));
-    assert!(!r.group_entities.contains_key("symmetry_x"));
-    for (q, c) in &r.checks {
+    assert!(!occ.group_entities.contains_key("symmetry_x"));
+    for (q, c) in r.checks.iter().chain(&occ.checks) {
         assert!(c.agree, "{q}: {c:?}");
     }
 }

@@ -90,6 +90,10 @@ pub struct MeshReport {
     /// the model is the meshed part itself.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub unfolded_from: Option<String>,
+    /// gmsh's OpenCASCADE model measured against the geometry (specimens
+    /// the geometry stage built; `None` for other `.geo` files).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub occ: Option<geom::occ::OccReport>,
     pub timings_s: Timings,
 }
 

@@ -34,6 +34,10 @@ pub enum MeshError {
         diagnoses: Vec<geom::diagnose::Diagnosis>,
         output: String,
     },
+    /// The model gmsh built is not the specimen the geometry describes
+    /// (a measure more than 1 % off, an empty group, leftover entities).
+    #[error("the model gmsh built from the geometry's script: {0}")]
+    Geometry(#[from] geom::GeomError),
     /// gmsh did not finish in time and was killed.
     #[error("gmsh did not finish meshing {geo} within {seconds} s (mesh.timeout) and was killed", geo = .geo.display())]
     GmshTimeout { geo: PathBuf, seconds: f64 },

@@ -29,7 +29,7 @@ pub mod vtu;
 
 pub use build::{build_model, MeshReport, Timings};
 pub use error::MeshError;
-pub use gmsh_run::{gmsh_args, run_gmsh, Gmsh, GmshTiming};
+pub use gmsh_run::{gmsh_args, run_gmsh, Gmsh, GmshRun};
 pub use half_turn::HalfTurnTwins;
 pub use model::*;
 pub use read::{read_msh, RawMesh};
@@ -101,8 +101,10 @@ pub fn explain_gmsh_failure(
 }
 
 /// [`mesh_specimen`] for the specimen `geom` built from `bar` and
-/// `specimen`: a gmsh failure is explained in the specimen's terms
-/// ([`explain_gmsh_failure`]).
+/// `specimen`: the model gmsh builds is checked against the geometry
+/// (`geom::occ`: volumes and areas within 1 % of the analytic ones, no
+/// empty group, no leftover entity; `mesh.json`'s `occ`), and a gmsh
+/// failure is explained in the specimen's terms ([`explain_gmsh_failure`]).
 pub fn mesh_built_specimen(
     gmsh: &Gmsh,
     geo: &Path,
@@ -111,13 +113,18 @@ pub fn mesh_built_specimen(
     specimen: &geom::spec::Specimen,
     out_dir: &Path,
 ) -> Result<MeshReport, MeshError> {
-    mesh_specimen(
+    let check = |measures: &str| {
+        geom::occ::OccReport::check(measures, bar, specimen, geo)
+            .map(Some)
+            .map_err(MeshError::from)
+    };
+    mesh_checked(
         gmsh,
         geo,
         spec,
-        bar.diameter,
-        specimen.adhesive_length,
+        (bar.diameter, specimen.adhesive_length),
         out_dir,
+        &check,
     )
     .map_err(|e| {
         let layout = geom::layout::Layout::new(bar, specimen);
@@ -139,6 +146,30 @@ pub fn mesh_specimen(
     adhesive_length: f64,
     out_dir: &Path,
 ) -> Result<MeshReport, MeshError> {
+    mesh_checked(
+        gmsh,
+        geo,
+        spec,
+        (bar_diameter, adhesive_length),
+        out_dir,
+        &|_| Ok(None),
+    )
+}
+
+/// What turns gmsh's measurement of the built model into `mesh.json`'s
+/// `occ`, or refuses the model.
+type OccCheck<'a> = &'a dyn Fn(&str) -> Result<Option<geom::occ::OccReport>, MeshError>;
+
+/// [`mesh_specimen`] with the built model checked by `check` before
+/// anything is written.
+fn mesh_checked(
+    gmsh: &Gmsh,
+    geo: &Path,
+    spec: &MeshSpec,
+    (bar_diameter, adhesive_length): (f64, f64),
+    out_dir: &Path,
+    check: OccCheck,
+) -> Result<MeshReport, MeshError> {
     std::fs::create_dir_all(out_dir).map_err(|e| MeshError::io(out_dir, e))?;
     let gmsh_version = gmsh.version().to_string();
     let finals: Vec<PathBuf> = [MSH_FILE, MODEL_FILE, VTU_FILE, REPORT_FILE]
@@ -153,7 +184,7 @@ pub fn mesh_specimen(
             .collect(),
     );
 
-    let (timing, used, fallback) = match run_gmsh(gmsh, geo, spec, &tmp_msh) {
+    let (run, used, fallback) = match run_gmsh(gmsh, geo, spec, &tmp_msh) {
         // gmsh 4.15.2's HXT aborts ("double free or corruption") in the
         // boundary recovery of some rib designs after inserting Steiner
         // points (35° ribs; docs/mesh.md), where Delaunay meshes them.
@@ -164,7 +195,7 @@ pub fn mesh_specimen(
                 algorithm_3d: spec::Algorithm3d::Delaunay,
                 ..spec.clone()
             };
-            let timing = run_gmsh(gmsh, geo, &delaunay, &tmp_msh)?;
+            let run = run_gmsh(gmsh, geo, &delaunay, &tmp_msh)?;
             let said = output
                 .lines()
                 .rev()
@@ -173,10 +204,11 @@ pub fn mesh_specimen(
                 .trim()
                 .to_string();
             let why = format!("hxt failed ({status}: {said}); meshed with delaunay");
-            (timing, spec::Algorithm3d::Delaunay, Some(why))
+            (run, spec::Algorithm3d::Delaunay, Some(why))
         }
         other => (other?, spec.algorithm_3d, None),
     };
+    let occ = check(&run.occ_measures)?;
     let t = Instant::now();
     let mut raw = read_msh(&tmp_msh)?;
     raw.source = finals[0].clone();
@@ -203,8 +235,9 @@ pub fn mesh_specimen(
     report.gmsh_version = gmsh_version;
     report.algorithm_3d = Some(used);
     report.algorithm_fallback = fallback;
+    report.occ = occ;
     report.timings_s = Timings {
-        gmsh: timing.seconds,
+        gmsh: run.seconds,
         read: t_read,
         build: t_build,
         write: t.elapsed().as_secs_f64(),

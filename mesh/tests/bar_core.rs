@@ -23,7 +23,7 @@ fn bar_core_coarsens_the_interior_only() {
     let mut meshes = Vec::new();
     for core in [None, Some(4e-3)] {
         let dir = scratch(&format!("bar-core-{}", core.is_some()));
-        geom::build_geometry(&bar, &specimen, gmsh(), &dir).unwrap();
+        geom::build_geometry(&bar, &specimen, &dir).unwrap();
         let spec = MeshSpec {
             h_interface: 1e-3,
             h_outer: 6e-3,

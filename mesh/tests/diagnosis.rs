@@ -51,3 +51,50 @@ fn gmsh_failure_names_the_surface_its_place_and_the_remedy() {
     );
     eprintln!("{msg}");
 }
+
+/// A script that does not build the specimen the geometry describes (a
+/// smooth 8 mm bar's `.geo` meshed for a 10 mm bar) is refused before
+/// anything is written: gmsh's measure of the built model names the
+/// quantity, the three values and the difference (SPEC §2's check, made
+/// in the mesh stage's gmsh run).
+#[test]
+fn a_model_unlike_the_geometry_is_refused_naming_the_quantity() {
+    let dir = scratch("occ-disagree");
+    let resolve = |bar: &str| {
+        let bar: geom::spec::RawBar = serde_yaml::from_str(bar).unwrap();
+        let specimen: geom::spec::RawSpecimen = serde_yaml::from_str(
+            "{cube_side: 24 mm, adhesive_length: 10 mm, free_overhang: 2 mm, loaded_overhang: 4 mm}",
+        )
+        .unwrap();
+        geom::spec::resolve(&bar, &specimen).unwrap()
+    };
+    let (bar8, specimen) = resolve("{kind: smooth, diameter: 8 mm}");
+    geom::build_geometry(&bar8, &specimen, &dir).unwrap();
+    let (bar10, specimen10) = resolve("{kind: smooth, diameter: 10 mm}");
+    let spec = MeshSpec {
+        h_interface: 2e-3,
+        h_outer: 6e-3,
+        ..MeshSpec::default()
+    };
+    let out = dir.join("mesh");
+    let geo = dir.join("specimen.geo");
+    let err = mesh_built_specimen(gmsh(), &geo, &spec, &bar10, &specimen10, &out).unwrap_err();
+    let msg = err.to_string();
+    assert!(
+        matches!(
+            &err,
+            MeshError::Geometry(geom::GeomError::Disagree { quantity, .. })
+                if quantity == "bar_volume_m3"
+        ),
+        "{msg}"
+    );
+    assert!(
+        msg.contains("gmsh OCC") && msg.contains("differ by"),
+        "{msg}"
+    );
+    assert!(!out.join("mesh.json").exists() && !out.join("model.bin").exists());
+    // The same script meshed for the bar it builds passes, with the measure.
+    let report = mesh_built_specimen(gmsh(), &geo, &spec, &bar8, &specimen, &out).unwrap();
+    let occ = report.occ.expect("gmsh's measure of the built model");
+    assert!(occ.checks.values().all(|c| c.agree && c.gmsh_occ.is_some()));
+}

@@ -152,9 +152,10 @@ fn check(i: usize, x: &Design) -> Result<bool, String> {
             };
         }
     };
-    // The script the geometry stage writes, without its gmsh run: the mesh
-    // stage's gmsh builds the same OpenCASCADE shapes again, and the area
-    // of what it meshes is the check. The analytic area is the geometry's.
+    // The script the geometry stage writes; the mesh stage's gmsh builds
+    // it, checks the built model against the geometry (volumes and areas
+    // within 1 %) and meshes it, and the area of what it meshes is the
+    // check. The analytic area is the geometry's.
     let dir = scratch(&format!("envelope-{i}"));
     let geo_path = dir.join("specimen.geo");
     let layout = geom::layout::Layout::new(&bar, &specimen);
@@ -170,6 +171,17 @@ fn check(i: usize, x: &Design) -> Result<bool, String> {
     )
     .map_err(|e| format!("design {i} {x:?}: mesh: {e}"))?;
     let _ = std::fs::remove_dir_all(&dir);
+    let occ = m
+        .occ
+        .as_ref()
+        .ok_or(format!("design {i}: no OCC measure"))?;
+    if let Some((q, c)) = occ
+        .checks
+        .iter()
+        .find(|(_, c)| c.gmsh_occ.is_none() || !c.agree)
+    {
+        return Err(format!("design {i} {x:?}: {q}: {c:?}"));
+    }
     // The model may be a half (herringbone bars); the metrics are of the
     // whole specimen.
     let meshed = m.interface_area_adhesive_m2 / specimen.symmetry.fraction();

@@ -21,7 +21,7 @@ fn ribbed_specimen_topology_and_area() {
     )
     .unwrap();
     let (bar, specimen) = geom::spec::resolve(&bar, &specimen).unwrap();
-    let geo_report = geom::build_geometry(&bar, &specimen, gmsh(), &dir).unwrap();
+    let geo_report = geom::build_geometry(&bar, &specimen, &dir).unwrap();
     let spec = MeshSpec {
         h_interface: 0.4e-3,
         h_outer: 4e-3,

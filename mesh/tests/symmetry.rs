@@ -27,7 +27,7 @@ fn quarter_smooth80_model() {
     .unwrap();
     let (bar, specimen) = geom::spec::resolve(&bar, &specimen).unwrap();
     assert_eq!(specimen.symmetry, geom::spec::Symmetry::Quarter);
-    geom::build_geometry(&bar, &specimen, gmsh(), &dir).unwrap();
+    geom::build_geometry(&bar, &specimen, &dir).unwrap();
     let spec = MeshSpec {
         h_interface: 0.8e-3,
         h_outer: 5e-3,
@@ -215,7 +215,7 @@ fn half_model(side_b: &str, symmetry: &str, expect: Symmetry) -> Model {
         _ => geom::spec::Symmetry::Half,
     };
     assert_eq!(specimen.symmetry, geom_symmetry);
-    let built = geom::build_geometry(&bar, &specimen, gmsh(), &dir).unwrap();
+    let built = geom::build_geometry(&bar, &specimen, &dir).unwrap();
     let spec = MeshSpec {
         h_interface: 1.6e-3,
         h_outer: 6e-3,

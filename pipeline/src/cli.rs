@@ -38,9 +38,9 @@ pub struct SceneArgs {
 
 #[derive(Debug, Subcommand)]
 pub enum Command {
-    /// Build the bar and specimen solid: specimen.geo and geometry.json.
+    /// Write the bar and specimen solid's OpenCASCADE script and its measures: specimen.geo and geometry.json.
     Geometry(SceneArgs),
-    /// Mesh with gmsh and build the model with interface elements.
+    /// Build the solid in gmsh, check it against the geometry, mesh it and build the model with interface elements.
     Mesh(SceneArgs),
     /// Solve the pull-out: curve.csv, solve summary, fields.
     Solve(SceneArgs),

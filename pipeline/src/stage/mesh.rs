@@ -23,5 +23,17 @@ pub fn run(ctx: &Ctx, out: &Path) -> Result<()> {
         report.interface_elements_adhesive + report.interface_elements_free,
         report.min_quality
     ));
+    if let Some(occ) = &report.occ {
+        let worst = occ
+            .checks
+            .values()
+            .map(|c| c.max_rel_diff)
+            .fold(0.0, f64::max);
+        ctx.printer.detail(&format!(
+            "mesh: gmsh built the model in {:.1} s; its volumes and areas within {:.3} % of the geometry's",
+            occ.build_seconds,
+            100.0 * worst
+        ));
+    }
     Ok(())
 }
