@@ -82,6 +82,7 @@ fn mazars() -> Mazars {
             fracture_energy: 80.0,
         },
         compression: CompressionSoftening::SizeFit,
+        regularisation_length: None,
     }
     .at_size(1e-3)
     .unwrap()
@@ -532,6 +533,7 @@ fn mazars_size_regularisation() {
             fracture_energy: 80.0,
         },
         compression: CompressionSoftening::SizeFit,
+        regularisation_length: None,
     };
     for l in [0.2e-3, 1e-3, 5e-3] {
         let law = m.at_size(l).unwrap();
@@ -555,6 +557,48 @@ fn mazars_size_regularisation() {
     assert!(matches!(
         m.at_size(-1.0),
         Err(MazarsSizeError::BadSize { .. })
+    ));
+}
+
+/// With a fixed `regularisation_length` every element size gets the law of
+/// that length (the same B_t and compression fit), so a damage zone spread
+/// over many elements dissipates G_f / l per volume on any mesh; without it
+/// the law follows the element (eq. 11). A length the regularised tension
+/// does not admit is an error naming the limit.
+#[test]
+fn mazars_fixed_regularisation_length() {
+    let paper = MazarsMaterial {
+        young_modulus: 30e9,
+        poisson_ratio: 0.2,
+        eps_d0: 1e-4,
+        shear_exponent: 1.06,
+        tension: TensionSoftening::Regularised {
+            fracture_energy: 80.0,
+        },
+        compression: CompressionSoftening::SizeFit,
+        regularisation_length: None,
+    };
+    let fixed = MazarsMaterial {
+        regularisation_length: Some(1e-3),
+        ..paper
+    };
+    let at_1mm = paper.at_size(1e-3).unwrap();
+    for l in [0.2e-3, 0.66e-3, 3e-3] {
+        assert_eq!(fixed.at_size(l).unwrap(), at_1mm, "l = {l}");
+        assert_ne!(paper.at_size(l).unwrap(), at_1mm, "l = {l}");
+    }
+    // The element size is still checked.
+    assert!(matches!(
+        fixed.at_size(-1.0),
+        Err(MazarsSizeError::BadSize { .. })
+    ));
+    let too_long = MazarsMaterial {
+        regularisation_length: Some(0.6),
+        ..paper
+    };
+    assert!(matches!(
+        too_long.at_size(1e-3),
+        Err(MazarsSizeError::TooLarge { .. })
     ));
 }
 

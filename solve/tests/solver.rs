@@ -1714,6 +1714,7 @@ fn kept_element_matrices_assemble_the_full_tangent() {
                 fracture_energy: 80.0,
             },
             compression: CompressionSoftening::SizeFit,
+            regularisation_length: None,
         }
         .at_size(2e-3)
         .unwrap(),

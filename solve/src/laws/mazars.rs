@@ -77,6 +77,14 @@ pub struct MazarsMaterial {
     pub shear_exponent: f64,
     pub tension: TensionSoftening,
     pub compression: CompressionSoftening,
+    /// The length l that eqs. (11)–(13) regularise with, m. `None` (the
+    /// paper): each element's own size, the crack band of a damage band one
+    /// element wide. A fixed length gives every element the same law, with
+    /// G_f / l per unit volume whatever the mesh: for damage zones spread
+    /// over many elements (in front of the ribs), whose energy per volume
+    /// the element-size law changes with the mesh.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub regularisation_length: Option<f64>,
 }
 
 /// Why no law exists for an element of the given size.
@@ -116,10 +124,12 @@ impl MazarsMaterial {
     }
 
     /// The law of an element of characteristic size `l` (m, eq. 11).
+    /// With a `regularisation_length` every size gets the law of that length.
     pub fn at_size(&self, l: f64) -> Result<Mazars, MazarsSizeError> {
         if !(l.is_finite() && l > 0.0) {
             return Err(MazarsSizeError::BadSize { l });
         }
+        let l = self.regularisation_length.unwrap_or(l);
         let (e, e0) = (self.young_modulus, self.eps_d0);
         let tension = match self.tension {
             TensionSoftening::Regularised { fracture_energy } => {

@@ -200,6 +200,8 @@ fn concrete_from(p: &RawParameters) -> RawConcrete {
         b_t: p.b_t.clone(),
         a_c: p.a_c.clone(),
         b_c: p.b_c.clone(),
+        // A material point is driven at its own element size `l`.
+        regularisation_length: None,
     }
 }
 

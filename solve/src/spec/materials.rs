@@ -92,6 +92,9 @@ pub struct RawConcrete {
     pub a_c: Option<RawQuantity>,
     #[serde(rename = "Bc")]
     pub b_c: Option<RawQuantity>,
+    /// Mazars: the length eqs. (11)–(13) regularise with (default: each
+    /// tet's own size, as the paper).
+    pub regularisation_length: Option<RawQuantity>,
 }
 
 /// `materials.steel` as written.
@@ -399,6 +402,7 @@ pub fn resolve_concrete(
             ("Bt", raw.b_t.is_some()),
             ("Ac", raw.a_c.is_some()),
             ("Bc", raw.b_c.is_some()),
+            ("regularisation_length", raw.regularisation_length.is_some()),
         ])?;
         return Ok(ConcreteModel::Elastic(LinearElastic {
             young_modulus: e,
@@ -451,14 +455,34 @@ pub fn resolve_concrete(
     } else {
         CompressionSoftening::SizeFit
     };
-    Ok(ConcreteModel::Mazars(MazarsMaterial {
+    let regularisation_length = k
+        .get(
+            &raw.regularisation_length,
+            "regularisation_length",
+            Dim::Length,
+        )?
+        .map(|l| k.positive("regularisation_length", l))
+        .transpose()?;
+    let material = MazarsMaterial {
         young_modulus: e,
         poisson_ratio: nu,
         eps_d0,
         shear_exponent: beta,
         tension,
         compression,
-    }))
+        regularisation_length,
+    };
+    // A fixed length must admit the law (the element sizes are checked
+    // per tet when the mesh is known).
+    if let Some(l) = regularisation_length {
+        material
+            .at_size(l)
+            .map_err(|e| MaterialsSpecError::Inconsistent {
+                key: k.key("regularisation_length"),
+                detail: e.to_string(),
+            })?;
+    }
+    Ok(ConcreteModel::Mazars(material))
 }
 
 /// Resolves `raw` as steel under `prefix`.
@@ -723,6 +747,35 @@ mod tests {
 
     fn err(yaml: &str) -> String {
         resolve(yaml).unwrap_err().to_string()
+    }
+
+    /// `regularisation_length` reads a length, must be positive and admit
+    /// the regularised tension, and belongs to Mazars only; absent, the
+    /// resolved (serialised) concrete is as before, so stage keys stay.
+    #[test]
+    fn regularisation_length_is_read_and_checked() {
+        let m = resolve("concrete: {regularisation_length: 0.66 mm}").unwrap();
+        let ConcreteModel::Mazars(c) = m.concrete else {
+            panic!()
+        };
+        assert!((c.regularisation_length.unwrap() - 0.66e-3).abs() < 1e-15);
+        let plain = resolve("{}").unwrap();
+        let text = serde_json::to_string(&plain.concrete).unwrap();
+        assert!(!text.contains("regularisation_length"), "{text}");
+        for (yaml, words) in [
+            (
+                "concrete: {regularisation_length: -1 mm}",
+                "materials.concrete.regularisation_length",
+            ),
+            ("concrete: {regularisation_length: 2 m}", "too large"),
+            (
+                "concrete: {law: elastic, regularisation_length: 1 mm}",
+                "regularisation_length",
+            ),
+        ] {
+            let e = err(yaml);
+            assert!(e.contains(words), "{yaml}: {e}");
+        }
     }
 
     /// Defaults are the paper's: Mazars R1 concrete, J2 steel, FCZM calibrated by
