@@ -71,8 +71,9 @@ fn coulomb() -> Coulomb {
     }
 }
 
-/// Fig. 4b concrete at l = 1 mm, Table 1 compression from eqs. (12)–(13).
-fn mazars() -> Mazars {
+/// Fig. 4b concrete (G_f = 80 N/m), Table 1 compression from eqs. (12)–(13),
+/// regularised with each element's size.
+fn fig4b_concrete() -> MazarsMaterial {
     MazarsMaterial {
         young_modulus: 30e9,
         poisson_ratio: 0.2,
@@ -84,8 +85,11 @@ fn mazars() -> Mazars {
         compression: CompressionSoftening::SizeFit,
         regularisation_length: None,
     }
-    .at_size(1e-3)
-    .unwrap()
+}
+
+/// Fig. 4b concrete at l = 1 mm.
+fn mazars() -> Mazars {
+    fig4b_concrete().at_size(1e-3).unwrap()
 }
 
 fn j2() -> J2 {
@@ -524,17 +528,7 @@ fn contact_is_no_tension_frictionless() {
 /// Hillerborg's B_t follows the energy balance G_f = l (E ε_D0²/2 + E ε_D0/B_t), and too large an element is an error naming the limit (eq. 10 as read in SPEC §5).
 #[test]
 fn mazars_size_regularisation() {
-    let m = MazarsMaterial {
-        young_modulus: 30e9,
-        poisson_ratio: 0.2,
-        eps_d0: 1e-4,
-        shear_exponent: 1.06,
-        tension: TensionSoftening::Regularised {
-            fracture_energy: 80.0,
-        },
-        compression: CompressionSoftening::SizeFit,
-        regularisation_length: None,
-    };
+    let m = fig4b_concrete();
     for l in [0.2e-3, 1e-3, 5e-3] {
         let law = m.at_size(l).unwrap();
         let solve::laws::mazars::TensionBranch::Exponential { b_t } = law.tension else {
@@ -567,17 +561,7 @@ fn mazars_size_regularisation() {
 /// does not admit is an error naming the limit.
 #[test]
 fn mazars_fixed_regularisation_length() {
-    let paper = MazarsMaterial {
-        young_modulus: 30e9,
-        poisson_ratio: 0.2,
-        eps_d0: 1e-4,
-        shear_exponent: 1.06,
-        tension: TensionSoftening::Regularised {
-            fracture_energy: 80.0,
-        },
-        compression: CompressionSoftening::SizeFit,
-        regularisation_length: None,
-    };
+    let paper = fig4b_concrete();
     let fixed = MazarsMaterial {
         regularisation_length: Some(1e-3),
         ..paper
