@@ -101,6 +101,8 @@ pub enum SectionError {
     Solver(#[from] solve::spec::solver::SolverSpecError),
     #[error(transparent)]
     Outputs(#[from] crate::outputs::OutputsError),
+    #[error("{key}: {detail}")]
+    Inconsistent { key: &'static str, detail: String },
 }
 
 /// Scene names become directory names: keep them portable.
@@ -209,6 +211,9 @@ impl RawScene {
     pub fn resolve(&self) -> Result<Scene, SectionError> {
         check_name(&self.name).map_err(SectionError::Name)?;
         let (bar, geometry) = geom::spec::resolve(&self.bar, &self.specimen)?;
+        let materials = self.materials.resolve()?;
+        let solver = self.solver.resolve()?;
+        averaging_is_staggered(&materials, &solver)?;
         Ok(Scene {
             name: self.name.clone(),
             bar,
@@ -217,18 +222,62 @@ impl RawScene {
                 non_adhesive: self.non_adhesive.unwrap_or_default(),
             },
             mesh: self.mesh.resolve()?,
-            materials: self.materials.resolve()?,
+            materials,
             loading: self.loading.resolve()?,
-            solver: self.solver.resolve()?,
+            solver,
             outputs: self.outputs.resolve()?,
             written: serde_json::Value::Null,
         })
     }
 }
 
+/// A gradient-enhanced damage updates the history after each converged
+/// step, which leaves the step's equilibrium unchanged only when its stress
+/// uses the extrapolated damage (IMPL-EX).
+fn averaging_is_staggered(
+    materials: &solve::spec::materials::Materials,
+    solver: &solve::spec::solver::SolverSettings,
+) -> Result<(), SectionError> {
+    use solve::spec::materials::ConcreteModel;
+    use solve::spec::solver::ConcreteIntegration;
+    let averaged =
+        matches!(materials.concrete, ConcreteModel::Mazars(m) if m.nonlocal_length.is_some());
+    if averaged && solver.concrete_integration != ConcreteIntegration::ImplEx {
+        return Err(SectionError::Inconsistent {
+            key: "materials.concrete.nonlocal_length",
+            detail: "needs solver.concrete_integration: impl_ex (the averaged strain \
+                     updates the damage history after each converged step)"
+                .into(),
+        });
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A gradient-enhanced damage without IMPL-EX concrete is refused
+    /// naming both keys.
+    #[test]
+    fn nonlocal_length_needs_impl_ex() {
+        let path = Path::new("s.yaml");
+        let set = |extra: &[&str]| {
+            let mut sets = vec![
+                "materials.concrete.regularisation_length=2 mm".to_string(),
+                "materials.concrete.nonlocal_length=1 mm".to_string(),
+            ];
+            sets.extend(extra.iter().map(|s| s.to_string()));
+            Scene::from_yaml(SCENE, path, &sets)
+        };
+        let err = set(&[]).unwrap_err().to_string();
+        assert!(
+            err.contains("materials.concrete.nonlocal_length")
+                && err.contains("solver.concrete_integration: impl_ex"),
+            "{err}"
+        );
+        assert!(set(&["solver.concrete_integration=impl_ex"]).is_ok());
+    }
 
     const SCENE: &str = "name: s\nbar: {kind: smooth, diameter: 8 mm}\n";
 

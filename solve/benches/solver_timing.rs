@@ -80,6 +80,7 @@ fn main() {
     let laws = ElementLaws {
         tets: vec![law; m.tets.len()],
         interfaces: vec![],
+        nonlocal_length: None,
     };
     let t = Instant::now();
     let sys = System::new(&m, &fixed, &[], &[]).unwrap();

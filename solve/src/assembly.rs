@@ -29,6 +29,10 @@ pub struct ElementLaws {
     /// One law per interface element; `None` leaves the element out
     /// (the free, non-adhesive zone by default: its twins are unconnected).
     pub interfaces: Vec<Option<AnyInterfaceLaw>>,
+    /// Internal length of the concrete's gradient-enhanced damage, m
+    /// (`materials.concrete.nonlocal_length`): the Mazars tets' κ then
+    /// follows their averaged equivalent strain (`crate::nonlocal`).
+    pub nonlocal_length: Option<f64>,
 }
 
 impl ElementLaws {
@@ -58,6 +62,7 @@ impl ElementLaws {
                     mesh::InterfaceZone::Free => free,
                 })
                 .collect(),
+            nonlocal_length: None,
         }
     }
 }

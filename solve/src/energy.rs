@@ -614,6 +614,7 @@ mod tests {
         let laws = ElementLaws {
             tets: Vec::new(),
             interfaces: vec![Some(law.into())],
+            nonlocal_length: None,
         };
         let mut tracker = EnergyTracker::new(&model, &laws).unwrap();
         let mut states = States::initial(&model);
@@ -684,6 +685,7 @@ mod tests {
         let laws = ElementLaws {
             tets: Vec::new(),
             interfaces: vec![Some(law.into())],
+            nonlocal_length: None,
         };
         // The state at opening `lam` from `states`: displacement, states, force.
         let at = |lam: f64, states: &States| {

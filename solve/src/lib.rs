@@ -3,7 +3,8 @@
 //! Where things are: a law in `laws/` (one file each, dispatched by
 //! `laws::AnyBulkLaw` / `AnyInterfaceLaw`); an element kernel in
 //! `elements/`; sparse linear algebra in `linalg/`; the Newton solver and
-//! path-following in `nonlinear/`; the problems built on them (pull-out,
+//! path-following in `nonlinear/`, the concrete's gradient-enhanced
+//! averaging in `nonlocal`; the problems built on them (pull-out,
 //! linear perfect bond, material point) in `problems/`; spec sections in
 //! `spec/`; what a run writes in `curve`, `fields` and `energy`.
 
@@ -15,5 +16,6 @@ pub mod fields;
 pub mod laws;
 pub mod linalg;
 pub mod nonlinear;
+pub mod nonlocal;
 pub mod problems;
 pub mod spec;

@@ -84,6 +84,7 @@ fn fig4b_concrete() -> MazarsMaterial {
         },
         compression: CompressionSoftening::SizeFit,
         regularisation_length: None,
+        nonlocal_length: None,
     }
 }
 

@@ -85,6 +85,13 @@ pub struct MazarsMaterial {
     /// the element-size law changes with the mesh.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub regularisation_length: Option<f64>,
+    /// Internal length ℓ of a gradient-enhanced damage, m: κ follows the
+    /// equivalent strain averaged by ε̄ − ℓ²∇²ε̄ = ε_eq over the concrete
+    /// (Peerlings et al. 1996; `crate::nonlocal`), so a damage zone has a
+    /// width of its own instead of one set by the mesh. `None` (the paper):
+    /// each point's own ε_eq.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub nonlocal_length: Option<f64>,
 }
 
 /// Why no law exists for an element of the given size.
@@ -298,6 +305,44 @@ impl Mazars {
         };
         let dwc = if ac > 0.0 { b * ac.powf(b - 1.0) } else { 0.0 };
         (d, wt * ddt + wc * ddc, dwt * dt - dwc * dc)
+    }
+}
+
+impl Mazars {
+    /// The point's own equivalent strain ε_eq (eq. 3) and α_t (eq. 6) at
+    /// `strain`: what a gradient-enhanced damage averages, and the split
+    /// between tension and compression it keeps local.
+    pub fn local_measures(&self, strain: &Vector6<f64>) -> (f64, f64) {
+        let principal = SymmetricEigen::new(voigt_to_tensor(strain)).eigenvalues;
+        let eps_eq = principal
+            .iter()
+            .map(|v| v.max(0.0).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        (eps_eq, self.alpha_t(&principal))
+    }
+
+    /// The implicit history of a step whose κ follows the averaged
+    /// equivalent strain `averaged` (ε̄) instead of the point's own:
+    /// κ = max(κ_committed, ε̄), D = max(D_committed, D(κ, α_t)); the
+    /// stress of the step (IMPL-EX) is left as `trial` has it.
+    pub fn averaged_state(
+        &self,
+        committed: &BulkState,
+        trial: &BulkState,
+        averaged: f64,
+        alpha_t: f64,
+    ) -> BulkState {
+        let kappa_c = committed.kappa.max(self.eps_d0);
+        let kappa = kappa_c.max(averaged);
+        let (d, _, _) = self.damage(kappa, alpha_t);
+        BulkState {
+            kappa,
+            damage: d.clamp(0.0, 1.0).max(committed.damage),
+            kappa_increment: kappa - kappa_c,
+            alpha_t,
+            ..*trial
+        }
     }
 }
 

@@ -19,13 +19,16 @@ use crate::assembly::{
     AssemblyError, ElementLaws, KeptBulkMatrix, LoadDerivatives, Outputs, States, System, Tangents,
 };
 use crate::elements::interface::INTERFACE_POINTS;
-use crate::laws::{BulkLaw, HeldHistory, InterfaceLaw, TangentKind};
+use crate::laws::mazars::Mazars;
+use crate::laws::{AnyBulkLaw, BulkLaw, HeldHistory, InterfaceLaw, TangentKind};
 use crate::linalg::norm;
+use crate::nonlocal::GradientAveraging;
 use crate::spec::solver::{
     ConcreteIntegration, InterfaceHolds, InterfaceIntegration, LinearSolverKind, Loading,
     PathFollowing, Predictor, SolverSettings,
 };
 use mesh::Model;
+use rayon::prelude::*;
 use std::time::Instant;
 
 /// The problem a run solves: the model with its laws, the Dirichlet
@@ -149,6 +152,10 @@ struct Driver<'a> {
     /// indicator's evaluation (kept apart from the step's own, which the
     /// commit reads).
     indicator_trial: Option<(States, Vec<f64>)>,
+    /// The concrete's gradient-enhanced averaging
+    /// (`materials.concrete.nonlocal_length`), applied to each converged
+    /// step's implicit history.
+    averaging: Option<GradientAveraging>,
     /// Under `solver.interface_holds: on_stall`, before the holds: the
     /// path before the first cut-back since the last easy step, which a
     /// stall goes back to.
@@ -255,6 +262,30 @@ impl<'a> Driver<'a> {
             &problem.dirichlet.charts,
             &mut wall,
         )?;
+        let averaging = match problem.laws.nonlocal_length {
+            None => None,
+            Some(_) if settings.concrete_integration != ConcreteIntegration::ImplEx => {
+                return Err(SolveError::Model(
+                    "materials.concrete.nonlocal_length needs solver.concrete_integration: \
+                     impl_ex (the averaged strain updates the history after each converged \
+                     step, which only the extrapolated damage leaves out of the step's \
+                     equilibrium)"
+                        .into(),
+                ))
+            }
+            Some(length) => {
+                let t = Instant::now();
+                let laws = &problem.laws.tets;
+                let averaging = GradientAveraging::new(
+                    &problem.model.tets,
+                    system.tet_geometry(),
+                    |i| mazars(&laws[i]).is_some(),
+                    length,
+                )?;
+                wall.factorisation += t.elapsed().as_secs_f64();
+                Some(averaging)
+            }
+        };
         let n_total = system.dofs().n_total();
         let ws = Workspace {
             system,
@@ -291,6 +322,7 @@ impl<'a> Driver<'a> {
             explicit_interface: settings.interface_integration == InterfaceIntegration::ImplEx,
             extrapolated: None,
             indicator_trial: None,
+            averaging,
             rewind: None,
             wall,
             previous_wall: WallTimes::default(),
@@ -554,6 +586,9 @@ impl<'a> Driver<'a> {
         summary.factorisations = self.ws.lin.factorisations;
         summary.pcg_iterations = self.ws.lin.pcg_iterations;
         summary.krylov_iterations = self.ws.lin.krylov_iterations;
+        if attempt.failure.is_none() {
+            self.average_history(&path.committed, &u_trial, &mut step_wall)?;
+        }
         let impl_ex_residual = match attempt.failure {
             None => self.extrapolation_error(&u_trial, &mut step_wall)?,
             Some(_) => None,
@@ -781,6 +816,51 @@ impl<'a> Driver<'a> {
         );
         self.ws.trial.clone_from(&path.committed);
         Ok(path)
+    }
+
+    /// Under a gradient-enhanced damage, the implicit history of the
+    /// converged iterate `u`: each Mazars tet's κ from the averaged
+    /// equivalent strain of `u` (see [`crate::nonlocal`]), in the
+    /// workspace's trial states. Its time is the constitutive phase's.
+    fn average_history(
+        &mut self,
+        committed: &States,
+        u: &[f64],
+        step_wall: &mut WallTimes,
+    ) -> Result<(), SolveError> {
+        let Some(averaging) = &self.averaging else {
+            return Ok(());
+        };
+        let t = Instant::now();
+        let tets = &self.problem.model.tets;
+        let laws = &self.problem.laws.tets;
+        let geometry = self.ws.system.tet_geometry();
+        let measures: Vec<(f64, f64)> = averaging
+            .tets()
+            .par_iter()
+            .map(|&i| {
+                let mut ue = [0.0; 12];
+                for (a, &n) in tets[i].iter().enumerate() {
+                    ue[3 * a..3 * a + 3].copy_from_slice(&u[3 * n as usize..3 * n as usize + 3]);
+                }
+                mazars(&laws[i]).map_or((0.0, 0.0), |law| {
+                    law.local_measures(&geometry[i].strain(&ue))
+                })
+            })
+            .collect();
+        let local: Vec<f64> = measures.iter().map(|m| m.0).collect();
+        let averaged = averaging.average(&local)?;
+        let trial = &mut self.ws.trial.bulk;
+        for ((&i, &eps_bar), &(_, alpha_t)) in averaging.tets().iter().zip(&averaged).zip(&measures)
+        {
+            if let Some(law) = mazars(&laws[i]) {
+                trial[i] = law.averaged_state(&committed.bulk[i], &trial[i], eps_bar, alpha_t);
+            }
+        }
+        let spent = t.elapsed().as_secs_f64();
+        step_wall.constitutive += spent;
+        self.wall.constitutive += spent;
+        Ok(())
     }
 
     /// The IMPL-EX error indicator of the converged iterate `u` (see
@@ -1180,6 +1260,14 @@ impl<'a> Driver<'a> {
             last,
             ending: Ending::Completed,
         })
+    }
+}
+
+/// The Mazars law of a tet, if it has one.
+fn mazars(law: &AnyBulkLaw) -> Option<&Mazars> {
+    match law {
+        AnyBulkLaw::Mazars(m) => Some(m),
+        _ => None,
     }
 }
 

@@ -202,6 +202,7 @@ fn concrete_from(p: &RawParameters) -> RawConcrete {
         b_c: p.b_c.clone(),
         // A material point is driven at its own element size `l`.
         regularisation_length: None,
+        nonlocal_length: None,
     }
 }
 

@@ -95,6 +95,9 @@ pub struct RawConcrete {
     /// Mazars: the length eqs. (11)–(13) regularise with (default: each
     /// tet's own size, as the paper).
     pub regularisation_length: Option<RawQuantity>,
+    /// Mazars: the internal length of a gradient-enhanced damage (default:
+    /// none, each point's own strain, as the paper).
+    pub nonlocal_length: Option<RawQuantity>,
 }
 
 /// `materials.steel` as written.
@@ -247,6 +250,13 @@ impl Materials {
             self.interface.law,
             free,
         )
+        .map(|laws| ElementLaws {
+            nonlocal_length: match self.concrete {
+                ConcreteModel::Mazars(m) => m.nonlocal_length,
+                ConcreteModel::Elastic(_) => None,
+            },
+            ..laws
+        })
         .map_err(|(tet, source)| ElementLawError {
             tet,
             size_mm: model.tet_size.get(tet).copied().unwrap_or(f64::NAN) * 1e3,
@@ -403,6 +413,7 @@ pub fn resolve_concrete(
             ("Ac", raw.a_c.is_some()),
             ("Bc", raw.b_c.is_some()),
             ("regularisation_length", raw.regularisation_length.is_some()),
+            ("nonlocal_length", raw.nonlocal_length.is_some()),
         ])?;
         return Ok(ConcreteModel::Elastic(LinearElastic {
             young_modulus: e,
@@ -463,6 +474,21 @@ pub fn resolve_concrete(
         )?
         .map(|l| k.positive("regularisation_length", l))
         .transpose()?;
+    let nonlocal_length = k
+        .get(&raw.nonlocal_length, "nonlocal_length", Dim::Length)?
+        .map(|l| k.positive("nonlocal_length", l))
+        .transpose()?;
+    // An averaged damage zone is as wide as the length makes it, not one
+    // element: the element-size law would change its energy per volume
+    // with the mesh.
+    if nonlocal_length.is_some() && regularisation_length.is_none() {
+        return Err(MaterialsSpecError::Inconsistent {
+            key: k.key("nonlocal_length"),
+            detail: "needs regularisation_length (the width the softening law's energy \
+                     per volume is set for), not each tet's own size"
+                .into(),
+        });
+    }
     let material = MazarsMaterial {
         young_modulus: e,
         poisson_ratio: nu,
@@ -471,6 +497,7 @@ pub fn resolve_concrete(
         tension,
         compression,
         regularisation_length,
+        nonlocal_length,
     };
     // A fixed length must admit the law (the element sizes are checked
     // per tet when the mesh is known).
@@ -747,6 +774,37 @@ mod tests {
 
     fn err(yaml: &str) -> String {
         resolve(yaml).unwrap_err().to_string()
+    }
+
+    /// `nonlocal_length` reads a positive length, needs a fixed
+    /// `regularisation_length` and belongs to Mazars only; absent, the
+    /// resolved concrete serialises as before.
+    #[test]
+    fn nonlocal_length_is_read_and_checked() {
+        let m = resolve("concrete: {regularisation_length: 2 mm, nonlocal_length: 1 mm}").unwrap();
+        let ConcreteModel::Mazars(c) = m.concrete else {
+            panic!()
+        };
+        assert!((c.nonlocal_length.unwrap() - 1e-3).abs() < 1e-15);
+        let text = serde_json::to_string(&resolve("{}").unwrap().concrete).unwrap();
+        assert!(!text.contains("nonlocal_length"), "{text}");
+        for (yaml, words) in [
+            (
+                "concrete: {nonlocal_length: 1 mm}",
+                "materials.concrete.nonlocal_length: needs regularisation_length",
+            ),
+            (
+                "concrete: {regularisation_length: 2 mm, nonlocal_length: 0 mm}",
+                "materials.concrete.nonlocal_length",
+            ),
+            (
+                "concrete: {law: elastic, nonlocal_length: 1 mm}",
+                "nonlocal_length",
+            ),
+        ] {
+            let e = err(yaml);
+            assert!(e.contains(words), "{yaml}: {e}");
+        }
     }
 
     /// `regularisation_length` reads a length, must be positive and admit
