@@ -555,6 +555,37 @@ fn mazars_size_regularisation() {
     ));
 }
 
+/// With the averaged strain equal to the point's own, the averaged history
+/// is the local law's (in tension, shear and compression, loading and
+/// unloading); a smaller average leaves κ where it was committed.
+#[test]
+fn mazars_averaged_history_with_the_local_strain_is_the_local_law() {
+    let law = fig4b_concrete().at_size(1e-3).unwrap();
+    let strains = [
+        Vector6::new(4e-4, -0.8e-4, -0.8e-4, 0.0, 0.0, 0.0),
+        Vector6::new(1e-4, 0.5e-4, 0.0, 3e-4, 0.0, 1e-4),
+        Vector6::new(-3e-3, 6e-4, 6e-4, 0.0, 0.0, 0.0),
+    ];
+    for strain in strains {
+        let mut committed = BulkState::default();
+        for scale in [0.5, 1.0, 2.0, 1.5, 3.0] {
+            let e = strain * scale;
+            let local = law.step(&committed, &e, TangentKind::Secant).unwrap().state;
+            let (eps_eq, alpha_t) = law.local_measures(&e);
+            let averaged = law.averaged_state(&committed, &local, eps_eq, alpha_t);
+            assert!((averaged.damage - local.damage).abs() < 1e-14, "{e:?}");
+            assert!((averaged.kappa - local.kappa).abs() < 1e-18, "{e:?}");
+            assert_eq!(averaged.kappa_increment, local.kappa_increment, "{e:?}");
+            let below = law.averaged_state(&committed, &local, 0.0, alpha_t);
+            assert_eq!(below.kappa, committed.kappa.max(law.eps_d0));
+            assert_eq!(below.kappa_increment, 0.0);
+            assert!(below.damage >= committed.damage);
+            committed = local;
+        }
+        assert!(committed.damage > 0.0);
+    }
+}
+
 /// With a fixed `regularisation_length` every element size gets the law of
 /// that length (the same B_t and compression fit), so a damage zone spread
 /// over many elements dissipates G_f / l per volume on any mesh; without it

@@ -234,6 +234,15 @@ fn spectral_gradient(eigenvectors: &Matrix3<f64>, weights: [f64; 3]) -> Vector6<
     )
 }
 
+/// ε_eq = √(Σ ⟨ε_i⟩₊²) over the principal strains (eq. 3).
+fn equivalent_strain(principal: &Vector3<f64>) -> f64 {
+    principal
+        .iter()
+        .map(|v| v.max(0.0).powi(2))
+        .sum::<f64>()
+        .sqrt()
+}
+
 fn voigt_to_tensor(e: &Vector6<f64>) -> Matrix3<f64> {
     Matrix3::new(
         e[0],
@@ -306,20 +315,13 @@ impl Mazars {
         let dwc = if ac > 0.0 { b * ac.powf(b - 1.0) } else { 0.0 };
         (d, wt * ddt + wc * ddc, dwt * dt - dwc * dc)
     }
-}
 
-impl Mazars {
     /// The point's own equivalent strain ε_eq (eq. 3) and α_t (eq. 6) at
     /// `strain`: what a gradient-enhanced damage averages, and the split
     /// between tension and compression it keeps local.
     pub fn local_measures(&self, strain: &Vector6<f64>) -> (f64, f64) {
         let principal = SymmetricEigen::new(voigt_to_tensor(strain)).eigenvalues;
-        let eps_eq = principal
-            .iter()
-            .map(|v| v.max(0.0).powi(2))
-            .sum::<f64>()
-            .sqrt();
-        (eps_eq, self.alpha_t(&principal))
+        (equivalent_strain(&principal), self.alpha_t(&principal))
     }
 
     /// The implicit history of a step whose κ follows the averaged
@@ -397,11 +399,7 @@ impl BulkLaw for Mazars {
         }
         let eig = SymmetricEigen::new(voigt_to_tensor(strain));
         let principal = eig.eigenvalues;
-        let eps_eq = principal
-            .iter()
-            .map(|v| v.max(0.0).powi(2))
-            .sum::<f64>()
-            .sqrt();
+        let eps_eq = equivalent_strain(&principal);
         let kappa_c = committed.kappa.max(self.eps_d0);
         let loading = eps_eq > kappa_c;
         let kappa = kappa_c.max(eps_eq);
