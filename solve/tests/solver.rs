@@ -1910,17 +1910,15 @@ fn tension_prism(
     (m, laws, dirichlet, measurement)
 }
 
-/// Work ∫F dλ (J) of a tension prism pulled to λ = 0.2 mm (its force
-/// then below 0.2 % of the peak: the work is the dissipation within that),
-/// and the final damage of each cell along z.
-fn prism_work(nz: usize, nonlocal_length: Option<f64>) -> (f64, Vec<f64>) {
+/// Runs the tension prism of `nz` cells and `nonlocal_length` with IMPL-EX
+/// concrete.
+fn run_prism(
+    (nz, nonlocal_length): (usize, Option<f64>),
+    loading: &Loading,
+    checkpoint: Option<solve::nonlinear::Checkpoint>,
+    observer: &mut dyn Observer,
+) -> solve::nonlinear::RunResult {
     let (m, laws, dirichlet, measurement) = tension_prism(nz, nonlocal_length);
-    let loading = Loading {
-        u_final: 0.2e-3,
-        initial_step: 0.01e-6,
-        max_step: 2e-6,
-        ..Loading::default()
-    };
     let settings = SolverSettings {
         concrete_integration: solve::spec::solver::ConcreteIntegration::ImplEx,
         ..SolverSettings::default()
@@ -1932,7 +1930,20 @@ fn prism_work(nz: usize, nonlocal_length: Option<f64>) -> (f64, Vec<f64>) {
         measurement: &measurement,
         yield_force: None,
     };
-    let r = run(&problem, &loading, &settings, None, &mut Silent).unwrap();
+    run(&problem, loading, &settings, checkpoint, observer).unwrap()
+}
+
+/// Work ∫F dλ (J) of a tension prism pulled to λ = 0.2 mm (its force
+/// then below 0.2 % of the peak: the work is the dissipation within that),
+/// and the final damage of each cell along z.
+fn prism_work(nz: usize, nonlocal_length: Option<f64>) -> (f64, Vec<f64>) {
+    let loading = Loading {
+        u_final: 0.2e-3,
+        initial_step: 0.01e-6,
+        max_step: 2e-6,
+        ..Loading::default()
+    };
+    let r = run_prism((nz, nonlocal_length), &loading, None, &mut Silent);
     let peak = r.rows.iter().map(|r| r.force).fold(0.0, f64::max);
     let last = r.rows.last().unwrap();
     assert!(last.force < 2e-3 * peak, "{} of {peak} N left", last.force);
@@ -2003,27 +2014,16 @@ fn gradient_damage_resumes_bit_for_bit() {
             }
         }
     }
-    let (m, laws, dirichlet, measurement) = tension_prism(20, Some(0.5e-3));
+    let prism = (20, Some(0.5e-3));
     let loading = Loading {
         u_final: 40e-6,
         initial_step: 0.05e-6,
         max_step: 1e-6,
         ..Loading::default()
     };
-    let settings = SolverSettings {
-        concrete_integration: solve::spec::solver::ConcreteIntegration::ImplEx,
-        ..SolverSettings::default()
-    };
-    let problem = Problem {
-        model: &m,
-        laws: &laws,
-        dirichlet: &dirichlet,
-        measurement: &measurement,
-        yield_force: None,
-    };
     let at = 15;
     let mut grab = Grab(at, None);
-    let full = run(&problem, &loading, &settings, None, &mut grab).unwrap();
+    let full = run_prism(prism, &loading, None, &mut grab);
     let checkpoint = grab.1.unwrap();
     let peak = full.rows.iter().map(|r| r.force).fold(0.0, f64::max);
     assert!(
@@ -2033,7 +2033,7 @@ fn gradient_damage_resumes_bit_for_bit() {
     );
     let damage = |s: &States| s.bulk.iter().map(|b| b.damage).sum::<f64>();
     assert!(damage(&full.last.states) > damage(&checkpoint.states) + 1.0);
-    let resumed = run(&problem, &loading, &settings, Some(checkpoint), &mut Silent).unwrap();
+    let resumed = run_prism(prism, &loading, Some(checkpoint), &mut Silent);
     assert_eq!(full.rows, resumed.rows);
 }
 
