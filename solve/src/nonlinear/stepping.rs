@@ -586,11 +586,8 @@ impl<'a> Driver<'a> {
         summary.factorisations = self.ws.lin.factorisations;
         summary.pcg_iterations = self.ws.lin.pcg_iterations;
         summary.krylov_iterations = self.ws.lin.krylov_iterations;
-        if attempt.failure.is_none() {
-            self.average_history(&path.committed, &u_trial, &mut step_wall)?;
-        }
         let impl_ex_residual = match attempt.failure {
-            None => self.extrapolation_error(&u_trial, &mut step_wall)?,
+            None => self.implicit_history(&path.committed, &u_trial, &mut step_wall)?,
             Some(_) => None,
         };
         if let Some(e) = impl_ex_residual {
@@ -816,6 +813,19 @@ impl<'a> Driver<'a> {
         );
         self.ws.trial.clone_from(&path.committed);
         Ok(path)
+    }
+
+    /// After a converged attempt at `u`: the averaged history (under a
+    /// gradient-enhanced damage), then the IMPL-EX error indicator against
+    /// it.
+    fn implicit_history(
+        &mut self,
+        committed: &States,
+        u: &[f64],
+        step_wall: &mut WallTimes,
+    ) -> Result<Option<f64>, SolveError> {
+        self.average_history(committed, u, step_wall)?;
+        self.extrapolation_error(u, step_wall)
     }
 
     /// Under a gradient-enhanced damage, the implicit history of the

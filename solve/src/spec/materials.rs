@@ -466,29 +466,7 @@ pub fn resolve_concrete(
     } else {
         CompressionSoftening::SizeFit
     };
-    let regularisation_length = k
-        .get(
-            &raw.regularisation_length,
-            "regularisation_length",
-            Dim::Length,
-        )?
-        .map(|l| k.positive("regularisation_length", l))
-        .transpose()?;
-    let nonlocal_length = k
-        .get(&raw.nonlocal_length, "nonlocal_length", Dim::Length)?
-        .map(|l| k.positive("nonlocal_length", l))
-        .transpose()?;
-    // An averaged damage zone is as wide as the length makes it, not one
-    // element: the element-size law would change its energy per volume
-    // with the mesh.
-    if nonlocal_length.is_some() && regularisation_length.is_none() {
-        return Err(MaterialsSpecError::Inconsistent {
-            key: k.key("nonlocal_length"),
-            detail: "needs regularisation_length (the width the softening law's energy \
-                     per volume is set for), not each tet's own size"
-                .into(),
-        });
-    }
+    let (regularisation_length, nonlocal_length) = mazars_lengths(&k, raw)?;
     let material = MazarsMaterial {
         young_modulus: e,
         poisson_ratio: nu,
@@ -510,6 +488,32 @@ pub fn resolve_concrete(
             })?;
     }
     Ok(ConcreteModel::Mazars(material))
+}
+
+/// Mazars' `regularisation_length` and `nonlocal_length`, m.
+fn mazars_lengths(
+    k: &Keys<'_>,
+    raw: &RawConcrete,
+) -> Result<(Option<f64>, Option<f64>), MaterialsSpecError> {
+    let length = |value: &Option<RawQuantity>, name: &str| {
+        k.get(value, name, Dim::Length)?
+            .map(|l| k.positive(name, l))
+            .transpose()
+    };
+    let regularisation_length = length(&raw.regularisation_length, "regularisation_length")?;
+    let nonlocal_length = length(&raw.nonlocal_length, "nonlocal_length")?;
+    // An averaged damage zone is as wide as the length makes it, not one
+    // element: the element-size law would change its energy per volume
+    // with the mesh.
+    if nonlocal_length.is_some() && regularisation_length.is_none() {
+        return Err(MaterialsSpecError::Inconsistent {
+            key: k.key("nonlocal_length"),
+            detail: "needs regularisation_length (the width the softening law's energy \
+                     per volume is set for), not each tet's own size"
+                .into(),
+        });
+    }
+    Ok((regularisation_length, nonlocal_length))
 }
 
 /// Resolves `raw` as steel under `prefix`.
