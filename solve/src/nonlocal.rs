@@ -98,6 +98,7 @@ impl GradientAveraging {
             for a in 0..4 {
                 for b in 0..4 {
                     let (row, col) = (t[a] as usize, t[b] as usize);
+                    // The lower triangle: each pair of nodes once.
                     if row < col {
                         continue;
                     }
@@ -110,8 +111,6 @@ impl GradientAveraging {
                     let column = &row_idx[col_ptr[col]..col_ptr[col + 1]];
                     let k =
                         col_ptr[col] + column.binary_search(&row).expect("entry in the pattern");
-                    // A node shared by two local indices of one tet cannot
-                    // happen in a valid tet; a == b lands on the diagonal once.
                     values[k] += mass + c * g.volume * grad;
                 }
             }
