@@ -231,26 +231,24 @@ impl RawScene {
     }
 }
 
-/// A gradient-enhanced damage updates the history after each converged
-/// step, which leaves the step's equilibrium unchanged only when its stress
-/// uses the extrapolated damage (IMPL-EX).
+/// A gradient-enhanced damage runs only staggered under IMPL-EX concrete
+/// (`solve::nonlocal::admits`); said before anything is meshed.
 fn averaging_is_staggered(
     materials: &solve::spec::materials::Materials,
     solver: &solve::spec::solver::SolverSettings,
 ) -> Result<(), SectionError> {
     use solve::spec::materials::ConcreteModel;
-    use solve::spec::solver::ConcreteIntegration;
-    let averaged =
-        matches!(materials.concrete, ConcreteModel::Mazars(m) if m.nonlocal_length.is_some());
-    if averaged && solver.concrete_integration != ConcreteIntegration::ImplEx {
-        return Err(SectionError::Inconsistent {
-            key: "materials.concrete.nonlocal_length",
-            detail: "needs solver.concrete_integration: impl_ex (the averaged strain \
-                     updates the damage history after each converged step)"
-                .into(),
-        });
+    let length = match materials.concrete {
+        ConcreteModel::Mazars(m) => m.nonlocal_length,
+        ConcreteModel::Elastic(_) => None,
+    };
+    if solve::nonlocal::admits(length, solver.concrete_integration) {
+        return Ok(());
     }
-    Ok(())
+    Err(SectionError::Inconsistent {
+        key: "materials.concrete.nonlocal_length",
+        detail: solve::nonlocal::NEEDS_IMPL_EX.into(),
+    })
 }
 
 #[cfg(test)]

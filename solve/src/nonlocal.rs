@@ -26,6 +26,19 @@
 
 use crate::elements::tet::TetGeometry;
 use crate::linalg::{Cholesky, LinearError, Ordering};
+use crate::spec::solver::ConcreteIntegration;
+
+/// What the averaging asks of the concrete's integration, said where a
+/// scene or a run does not give it (after the key `nonlocal_length`).
+pub const NEEDS_IMPL_EX: &str = "needs solver.concrete_integration: impl_ex (the averaged \
+     strain updates the damage history after each converged step, which only the \
+     extrapolated damage leaves out of the step's equilibrium)";
+
+/// Whether a gradient-enhanced damage of length `nonlocal_length` (if any)
+/// can run with `integration`: only staggered under IMPL-EX.
+pub fn admits(nonlocal_length: Option<f64>, integration: ConcreteIntegration) -> bool {
+    nonlocal_length.is_none() || integration == ConcreteIntegration::ImplEx
+}
 
 /// The factored averaging operator of a set of tets.
 pub struct GradientAveraging {

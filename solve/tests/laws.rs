@@ -560,7 +560,7 @@ fn mazars_size_regularisation() {
 /// unloading); a smaller average leaves κ where it was committed.
 #[test]
 fn mazars_averaged_history_with_the_local_strain_is_the_local_law() {
-    let law = fig4b_concrete().at_size(1e-3).unwrap();
+    let law = mazars();
     let strains = [
         Vector6::new(4e-4, -0.8e-4, -0.8e-4, 0.0, 0.0, 0.0),
         Vector6::new(1e-4, 0.5e-4, 0.0, 3e-4, 0.0, 1e-4),

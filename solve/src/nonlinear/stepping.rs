@@ -22,7 +22,7 @@ use crate::elements::interface::INTERFACE_POINTS;
 use crate::laws::mazars::Mazars;
 use crate::laws::{AnyBulkLaw, BulkLaw, HeldHistory, InterfaceLaw, TangentKind};
 use crate::linalg::norm;
-use crate::nonlocal::GradientAveraging;
+use crate::nonlocal::{self, GradientAveraging};
 use crate::spec::solver::{
     ConcreteIntegration, InterfaceHolds, InterfaceIntegration, LinearSolverKind, Loading,
     PathFollowing, Predictor, SolverSettings,
@@ -155,7 +155,7 @@ struct Driver<'a> {
     /// The concrete's gradient-enhanced averaging
     /// (`materials.concrete.nonlocal_length`), applied to each converged
     /// step's implicit history.
-    averaging: Option<GradientAveraging>,
+    averaging: Option<Averaging<'a>>,
     /// Under `solver.interface_holds: on_stall`, before the holds: the
     /// path before the first cut-back since the last easy step, which a
     /// stall goes back to.
@@ -262,26 +262,18 @@ impl<'a> Driver<'a> {
             &problem.dirichlet.charts,
             &mut wall,
         )?;
-        let averaging = match problem.laws.nonlocal_length {
+        let length = problem.laws.nonlocal_length;
+        if !nonlocal::admits(length, settings.concrete_integration) {
+            return Err(SolveError::Model(format!(
+                "materials.concrete.nonlocal_length {}",
+                nonlocal::NEEDS_IMPL_EX
+            )));
+        }
+        let averaging = match length {
             None => None,
-            Some(_) if settings.concrete_integration != ConcreteIntegration::ImplEx => {
-                return Err(SolveError::Model(
-                    "materials.concrete.nonlocal_length needs solver.concrete_integration: \
-                     impl_ex (the averaged strain updates the history after each converged \
-                     step, which only the extrapolated damage leaves out of the step's \
-                     equilibrium)"
-                        .into(),
-                ))
-            }
             Some(length) => {
                 let t = Instant::now();
-                let laws = &problem.laws.tets;
-                let averaging = GradientAveraging::new(
-                    &problem.model.tets,
-                    system.tet_geometry(),
-                    |i| mazars(&laws[i]).is_some(),
-                    length,
-                )?;
+                let averaging = Averaging::new(problem, system, length)?;
                 wall.factorisation += t.elapsed().as_secs_f64();
                 Some(averaging)
             }
@@ -838,34 +830,35 @@ impl<'a> Driver<'a> {
         u: &[f64],
         step_wall: &mut WallTimes,
     ) -> Result<(), SolveError> {
-        let Some(averaging) = &self.averaging else {
+        let Some(Averaging { operator, laws }) = &self.averaging else {
             return Ok(());
         };
         let t = Instant::now();
         let tets = &self.problem.model.tets;
-        let laws = &self.problem.laws.tets;
         let geometry = self.ws.system.tet_geometry();
-        let measures: Vec<(f64, f64)> = averaging
+        let measures: Vec<(f64, f64)> = operator
             .tets()
             .par_iter()
-            .map(|&i| {
+            .zip(laws)
+            .map(|(&i, law)| {
                 let mut ue = [0.0; 12];
                 for (a, &n) in tets[i].iter().enumerate() {
                     ue[3 * a..3 * a + 3].copy_from_slice(&u[3 * n as usize..3 * n as usize + 3]);
                 }
-                mazars(&laws[i]).map_or((0.0, 0.0), |law| {
-                    law.local_measures(&geometry[i].strain(&ue))
-                })
+                law.local_measures(&geometry[i].strain(&ue))
             })
             .collect();
         let local: Vec<f64> = measures.iter().map(|m| m.0).collect();
-        let averaged = averaging.average(&local)?;
+        let averaged = operator.average(&local)?;
         let trial = &mut self.ws.trial.bulk;
-        for ((&i, &eps_bar), &(_, alpha_t)) in averaging.tets().iter().zip(&averaged).zip(&measures)
+        for (((&i, law), &eps_bar), &(_, alpha_t)) in operator
+            .tets()
+            .iter()
+            .zip(laws)
+            .zip(&averaged)
+            .zip(&measures)
         {
-            if let Some(law) = mazars(&laws[i]) {
-                trial[i] = law.averaged_state(&committed.bulk[i], &trial[i], eps_bar, alpha_t);
-            }
+            trial[i] = law.averaged_state(&committed.bulk[i], &trial[i], eps_bar, alpha_t);
         }
         let spent = t.elapsed().as_secs_f64();
         step_wall.constitutive += spent;
@@ -1273,11 +1266,32 @@ impl<'a> Driver<'a> {
     }
 }
 
-/// The Mazars law of a tet, if it has one.
-fn mazars(law: &AnyBulkLaw) -> Option<&Mazars> {
-    match law {
-        AnyBulkLaw::Mazars(m) => Some(m),
-        _ => None,
+/// The concrete's averaging operator over the Mazars tets, and their laws
+/// in its order.
+struct Averaging<'a> {
+    operator: GradientAveraging,
+    laws: Vec<&'a Mazars>,
+}
+
+impl<'a> Averaging<'a> {
+    fn new(problem: Problem<'a>, system: &System, length: f64) -> Result<Self, SolveError> {
+        let mazars = |law: &'a AnyBulkLaw| match law {
+            AnyBulkLaw::Mazars(m) => Some(m),
+            _ => None,
+        };
+        let tets = &problem.laws.tets;
+        let operator = GradientAveraging::new(
+            &problem.model.tets,
+            system.tet_geometry(),
+            |i| mazars(&tets[i]).is_some(),
+            length,
+        )?;
+        let laws = operator
+            .tets()
+            .iter()
+            .filter_map(|&i| mazars(&tets[i]))
+            .collect();
+        Ok(Self { operator, laws })
     }
 }
 
