@@ -2090,3 +2090,130 @@ fn gradient_averaging_conserves_and_decays_over_its_length() {
         assert!((at(mid - far) / at(mid + far) - 1.0).abs() < 1e-6);
     }
 }
+
+/// One run of `snap_back_case` under the IMPL-EX interface: per converged
+/// step (λ, F, IMPL-EX indicator), the energy balance of the steps, and
+/// the checkpoint after step `keep`.
+struct ImplExSnapBack {
+    result: Result<solve::nonlinear::RunResult, SolveError>,
+    steps: Vec<(f64, f64, f64)>,
+    energy: Vec<solve::energy::EnergyRow>,
+    kept: Option<solve::nonlinear::Checkpoint>,
+}
+
+fn impl_ex_snap_back(
+    path_following: PathFollowing,
+    tolerance: f64,
+    keep: usize,
+    resume: Option<solve::nonlinear::Checkpoint>,
+) -> ImplExSnapBack {
+    use solve::energy::{EnergyRow, EnergyStart, EnergyTracker};
+    use solve::spec::solver::InterfaceIntegration;
+    struct Record<'t> {
+        steps: Vec<(f64, f64, f64)>,
+        tracker: EnergyTracker<'t>,
+        keep: usize,
+        kept: Option<solve::nonlinear::Checkpoint>,
+    }
+    impl Observer for Record<'_> {
+        fn step_converged(&mut self, r: &StepReport, v: &CommittedView<'_>) {
+            let e = r.impl_ex_residual.unwrap_or(0.0);
+            self.steps.push((r.row.u_imposed, r.row.force, e));
+            self.tracker
+                .step(r.row.u_imposed, r.row.force, v.u, v.states)
+                .unwrap();
+            if r.row.step == self.keep {
+                self.kept = Some((v.checkpoint)());
+            }
+        }
+        fn rewound(&mut self, _: usize, _: &CommittedView<'_>) {
+            panic!("the energy record does not follow a rewind");
+        }
+    }
+    let (m, laws, loading) = snap_back_case();
+    let settings = SolverSettings {
+        path_following,
+        interface_integration: InterfaceIntegration::ImplEx,
+        impl_ex_tolerance: tolerance,
+        impl_ex_reject: Some(2.0),
+        ..SolverSettings::default()
+    };
+    let tracker = match &resume {
+        None => EnergyTracker::new(&m, &laws).unwrap(),
+        Some(cp) => EnergyTracker::resume(
+            &m,
+            &laws,
+            EnergyStart {
+                u: &cp.u,
+                states: &cp.states,
+                rows: Vec::<EnergyRow>::new(),
+                lambda: cp.u_imposed,
+                force: cp.rows.last().unwrap().force,
+            },
+        )
+        .unwrap(),
+    };
+    let mut record = Record {
+        steps: Vec::new(),
+        tracker,
+        keep,
+        kept: None,
+    };
+    let result = solve_pullout(&m, &laws, &loading, &settings, resume, &mut record);
+    ImplExSnapBack {
+        result,
+        steps: record.steps,
+        energy: record.tracker.rows().to_vec(),
+        kept: record.kept,
+    }
+}
+
+/// Under the IMPL-EX interface a step's damage is extrapolated from the
+/// last one. Displacement control crosses the snap-back of
+/// `snap_back_case` at the minimum step, where no step can be redone
+/// shorter, with indicators near 1, and the steps' external work no
+/// longer matches the internal work. Holding the jumps of the points
+/// that soften (`path_following: process_zone`) bounds each step's
+/// damage: the path turns back in λ, every step's indicator stays near
+/// its tolerance and the energy balances (docs/solver.md,
+/// "Process-zone control").
+#[test]
+fn process_zone_control_follows_a_snap_back_under_impl_ex() {
+    let displacement = impl_ex_snap_back(PathFollowing::Off, 1e-2, 0, None);
+    assert!(displacement.result.is_ok());
+    let worst = |r: &ImplExSnapBack| r.steps.iter().map(|s| s.2).fold(0.0, f64::max);
+    let imbalance = |r: &ImplExSnapBack| solve::energy::check(&r.energy, 0.01);
+    assert!(worst(&displacement) > 0.5, "{}", worst(&displacement));
+    assert!(imbalance(&displacement).max_relative_imbalance > 0.1);
+
+    let zone = impl_ex_snap_back(PathFollowing::ProcessZone, 1e-2, 60, None);
+    let result = zone
+        .result
+        .as_ref()
+        .expect("the zone control runs to the end");
+    assert!(
+        matches!(result.ending, Ending::Unloaded { force, peak_force, .. } if force < 1e-2 * peak_force),
+        "{:?}",
+        result.ending
+    );
+    assert!(zone.steps.windows(2).any(|w| w[1].0 < w[0].0 - 1e-9));
+    // Steps at the minimum size (1e-10 m) may keep an indicator above the
+    // rejection limit 2e-2; none comes near displacement control's.
+    assert!(worst(&zone) < 0.05, "{}", worst(&zone));
+    let check = imbalance(&zone);
+    assert!(check.passed, "{check:?}");
+    // The dissipation does not depend on the tolerance: the integration
+    // error is the extrapolation's, bounded by the step control.
+    let finer = impl_ex_snap_back(PathFollowing::ProcessZone, 3e-3, 0, None);
+    let dissipated = |r: &ImplExSnapBack| r.energy.last().unwrap().dissipated;
+    let (a, b) = (dissipated(&zone), dissipated(&finer));
+    assert!((a - b).abs() < 5e-3 * b, "{a} against {b}");
+
+    // A run resumed from a checkpoint taken while the zone holds the
+    // steps goes on as the uninterrupted one, bit for bit.
+    let cp = zone.kept.expect("a checkpoint at step 60");
+    assert_eq!(cp.control_mode, solve::nonlinear::ControlMode::ProcessZone);
+    let resumed = impl_ex_snap_back(PathFollowing::ProcessZone, 1e-2, 0, Some(cp));
+    let rows = &result.rows[60..];
+    assert_eq!(resumed.result.unwrap().rows[60..], *rows);
+}

@@ -2,7 +2,8 @@
 //! the imposed displacement, is prescribed) or indirect displacement
 //! control, where λ is an unknown and a linear quantity of the
 //! displacement that grows monotonically along the path (here the
-//! free-end displacement, FED) is prescribed instead.
+//! free-end displacement, FED, or the jumps of the interface's process
+//! zone) is prescribed instead.
 //!
 //! Under indirect control each Newton correction solves the bordered system
 //!
@@ -60,6 +61,31 @@ impl Quantity {
                     .map(|(_, w)| w * r)
                     .sum::<f64>()
             })
+            .sum();
+        Self {
+            weights,
+            free,
+            per_lambda,
+        }
+    }
+    /// The quantity whose weight on global DOF d is `dense[d]` (zeros
+    /// skipped).
+    pub(crate) fn from_dense(dense: &[f64], dofs: &DofMap, dirichlet: &Dirichlet) -> Self {
+        let weights: Vec<(usize, f64)> = dense
+            .iter()
+            .enumerate()
+            .filter(|(_, &w)| w != 0.0)
+            .map(|(d, &w)| (d, w))
+            .collect();
+        let free = weights
+            .iter()
+            .filter_map(|&(d, w)| dofs.signed_index(d).map(|(f, sign)| (f, sign * w)))
+            .collect();
+        let per_lambda = dirichlet
+            .dofs
+            .iter()
+            .zip(&dirichlet.rate)
+            .map(|(&d, r)| dense[d] * r)
             .sum();
         Self {
             weights,
@@ -282,13 +308,17 @@ pub enum ControlMode {
     FreeEnd,
     /// The energy released by the step (dissipation control), J.
     Energy,
+    /// The r.m.s. jump increment of the interface points that softened in
+    /// the last step, along their last increments (a local arc-length on
+    /// the process zone), m.
+    ProcessZone,
 }
 
 impl ControlMode {
     /// The unit of a step size in this mode.
     pub fn step_unit(self) -> &'static str {
         match self {
-            ControlMode::Displacement | ControlMode::FreeEnd => "m",
+            ControlMode::Displacement | ControlMode::FreeEnd | ControlMode::ProcessZone => "m",
             ControlMode::Energy => "J",
         }
     }

@@ -1,9 +1,10 @@
 //! Adaptive load stepping from the start or a checkpoint to the end of the
 //! loading: one Newton attempt per try, cut-back on failure, growth after
 //! easy steps, IMPL-EX step control, the choice of what a step prescribes
-//! (the imposed displacement λ, or the free-end displacement under
-//! path-following, see `control`), and the committed state offered to the
-//! observer after every converged step.
+//! (the imposed displacement λ, or under path-following the free-end
+//! displacement, the energy a step releases or the jumps of the
+//! interface's process zone, see `control`), and the committed state
+//! offered to the observer after every converged step.
 
 use super::checkpoint::{Checkpoint, PreconditionerState};
 use super::control::{generalised_load, Constraint, Control, ControlMode, Indirect, Quantity};
@@ -125,6 +126,8 @@ struct Plan {
     target: f64,
     /// The predictor's multiple of the last increment (0: none).
     scale: f64,
+    /// The process zone's jump quantity a `ProcessZone` step prescribes.
+    zone: Option<Quantity>,
 }
 
 /// Everything a run works with besides its path.
@@ -168,8 +171,8 @@ struct Driver<'a> {
 
 /// Runs the loading from the checkpoint's state (or the start) to
 /// `loading.u_final` or `loading.fed_stop`, adaptive steps, Newton with
-/// line search; under `solver.path_following` the steps after the first
-/// prescribe the free-end displacement.
+/// line search; under `solver.path_following` steps may prescribe another
+/// quantity of the path than λ (see `Driver::plan`).
 pub fn run(
     problem: &Problem<'_>,
     loading: &Loading,
@@ -406,10 +409,12 @@ impl<'a> Driver<'a> {
         }
     }
 
-    /// What the next step prescribes and how far. Indirect control starts
+    /// What the next step prescribes and how far. FED control starts
     /// after the first converged step, when both λ and the FED grew in it
-    /// (their ratio converts the step size), and hands the step to
-    /// displacement control where the extrapolated λ would pass `u_final`.
+    /// (their ratio converts the step size); process-zone control after a
+    /// step in which λ grew and interface points softened, until a step in
+    /// which none did. Indirect control hands the step to displacement
+    /// control where the extrapolated λ would pass `u_final`.
     fn plan(&self, path: &mut Path) -> Plan {
         let loading = self.loading;
         let dl = path.last_lambda_increment;
@@ -422,6 +427,23 @@ impl<'a> Driver<'a> {
             path.mode = ControlMode::FreeEnd;
             path.next_step *= df / dl;
         }
+        let zone = (self.settings.path_following == PathFollowing::ProcessZone)
+            .then(|| self.process_zone(path))
+            .flatten();
+        match (&zone, path.mode) {
+            (Some((_, moved)), ControlMode::Displacement) if dl > 0.0 => {
+                path.mode = ControlMode::ProcessZone;
+                path.next_step *= moved / dl;
+            }
+            (None, ControlMode::ProcessZone) => {
+                // No point softened in the last step: nothing for the
+                // zone's constraint to hold; λ takes the steps again, as
+                // long as the last one moved it.
+                path.mode = ControlMode::Displacement;
+                path.next_step = dl.abs().clamp(self.loading.min_step, self.loading.max_step);
+            }
+            _ => {}
+        }
         let by_lambda = |h: f64| {
             let size = h.min(loading.u_final - path.lambda);
             Plan {
@@ -429,9 +451,31 @@ impl<'a> Driver<'a> {
                 size,
                 target: path.lambda + size,
                 scale: if dl > 0.0 { size / dl } else { 0.0 },
+                zone: None,
             }
         };
         match path.mode {
+            ControlMode::ProcessZone => {
+                let (quantity, moved) = zone.expect("a process zone");
+                let size = path.next_step;
+                let scale = size / moved;
+                if let Some(stop) = loading.fed_stop {
+                    let fed = self.fed.value(&path.u);
+                    if fed + scale * df >= stop {
+                        return self.by_fed(path, stop - fed, df);
+                    }
+                }
+                if path.lambda + scale * dl >= loading.u_final {
+                    return by_lambda(loading.u_final - path.lambda);
+                }
+                Plan {
+                    mode: ControlMode::ProcessZone,
+                    size,
+                    target: quantity.value(&path.u) + size,
+                    scale,
+                    zone: Some(quantity),
+                }
+            }
             ControlMode::Displacement => by_lambda(path.next_step),
             ControlMode::Energy => {
                 let (released, _) = path.last_energies();
@@ -451,6 +495,7 @@ impl<'a> Driver<'a> {
                     size,
                     target: size,
                     scale,
+                    zone: None,
                 }
             }
             ControlMode::FreeEnd => {
@@ -461,6 +506,56 @@ impl<'a> Driver<'a> {
                 plan
             }
         }
+    }
+
+    /// The process zone's jump quantity and its value for the last
+    /// increment (m), `None` when no interface point softened in the last
+    /// step. The zone is the node pairs whose λ̃ grew in it; each pair's
+    /// jump counts along its last increment Δ[u]_p, scaled so that the
+    /// quantity moves by the r.m.s. of |Δ[u]_p| over the zone (pairs
+    /// weighted by their area) in a step that repeats the last one:
+    /// q(u) = Σ_p w_p Δ[u]_p·[u]_p / (W · rms). The pairs moving fastest
+    /// weigh most; pairs outside the zone are free, and so is λ.
+    fn process_zone(&self, path: &Path) -> Option<(Quantity, f64)> {
+        let du = &path.last_increment;
+        if du.is_empty() {
+            return None;
+        }
+        let model = self.problem.model;
+        let laws = &self.problem.laws.interfaces;
+        let states = &path.committed.interface;
+        let mut dense = vec![0.0; du.len()];
+        let (mut area, mut squares) = (0.0, 0.0);
+        for (e, (element, law)) in model.interfaces.iter().zip(laws).enumerate() {
+            if law.is_none() {
+                continue;
+            }
+            let weight = element.area / INTERFACE_POINTS as f64;
+            for a in 0..INTERFACE_POINTS {
+                if states[e * INTERFACE_POINTS + a].lambda_increment <= 0.0 {
+                    continue;
+                }
+                let (s, c) = (
+                    3 * element.nodes[a] as usize,
+                    3 * element.nodes[a + INTERFACE_POINTS] as usize,
+                );
+                area += weight;
+                for k in 0..3 {
+                    let jump = du[c + k] - du[s + k];
+                    squares += weight * jump * jump;
+                    dense[c + k] += weight * jump;
+                    dense[s + k] -= weight * jump;
+                }
+            }
+        }
+        if squares <= 0.0 || !squares.is_finite() {
+            return None;
+        }
+        let rms = (squares / area).sqrt();
+        let norm = area * rms;
+        dense.iter_mut().for_each(|w| *w /= norm);
+        let quantity = Quantity::from_dense(&dense, self.ws.system.dofs(), self.problem.dirichlet);
+        Some((quantity, rms))
     }
 
     /// A step prescribing the FED `size` further (at most to `fed_stop`).
@@ -479,6 +574,7 @@ impl<'a> Driver<'a> {
             } else {
                 0.0
             },
+            zone: None,
         }
     }
 
@@ -612,7 +708,7 @@ impl<'a> Driver<'a> {
         (fed, rates): (&'b Quantity, &'b [(usize, f64)]),
         problem: &Problem<'b>,
         settings: &SolverSettings,
-        (path, plan): (&Path, &Plan),
+        (path, plan): (&Path, &'b Plan),
     ) -> (Vec<f64>, Control<'b>) {
         let mut u = path.u.clone();
         if settings.predictor == Predictor::Extrapolate && plan.scale > 0.0 {
@@ -630,6 +726,10 @@ impl<'a> Driver<'a> {
         let constraint = match plan.mode {
             ControlMode::FreeEnd => Constraint::Quantity {
                 quantity: fed,
+                target: plan.target,
+            },
+            ControlMode::ProcessZone => Constraint::Quantity {
+                quantity: plan.zone.as_ref().expect("a process zone's quantity"),
                 target: plan.target,
             },
             _ => Constraint::Energy {

@@ -307,6 +307,16 @@ pub enum PathFollowing {
     /// snap-backs. Back to displacement control when the steps turn
     /// elastic again.
     Energy,
+    /// Displacement control until a step softens interface points; from
+    /// then each step prescribes how far the jumps of those points (the
+    /// process zone: the points whose λ̃ grew in the last step) move on
+    /// along their last increments, their r.m.s. over the zone in metres,
+    /// and λ is an unknown: a local arc-length (Geers, IJNME 46, 1999)
+    /// that follows snap-backs in λ and in the FED. Its constraint is
+    /// linear in the step's displacement and bounds each point's damage
+    /// increment, which is what the IMPL-EX interface's error depends on.
+    /// Back to displacement control in a step after which no point softens.
+    ProcessZone,
     /// Displacement control until it fails at the minimum step after a
     /// step that dissipated (a snap-back: no equilibrium at a larger λ);
     /// from there dissipation control as in `energy`, back to displacement
