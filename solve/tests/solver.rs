@@ -2217,3 +2217,58 @@ fn process_zone_control_follows_a_snap_back_under_impl_ex() {
     let rows = &result.rows[60..];
     assert_eq!(resumed.result.unwrap().rows[60..], *rows);
 }
+
+/// Where a process-zone step would move λ further than
+/// `loading.max_step` (the zone's jumps hardly respond to λ, and the start
+/// state's own imbalance sends λ far), that step is taken under
+/// displacement control and the zone takes over again after it; bounded
+/// so tightly that this happens often, the snap-back case dissipates what
+/// it does without the bound.
+#[test]
+fn process_zone_hands_steps_that_move_the_load_far_to_displacement_control() {
+    use solve::spec::solver::InterfaceIntegration;
+    struct Record {
+        load_jumps: usize,
+        curve: Vec<(f64, f64)>,
+    }
+    impl Observer for Record {
+        fn step_converged(&mut self, r: &StepReport, _: &CommittedView<'_>) {
+            self.curve.push((r.row.u_imposed, r.row.force));
+        }
+        fn cutback(&mut self, c: &solve::nonlinear::Cutback) {
+            if let StepFailure::LoadJump { increment, limit } = c.reason {
+                assert!(increment.abs() > limit);
+                self.load_jumps += 1;
+            }
+        }
+    }
+    let (m, laws, loading) = snap_back_case();
+    let settings = SolverSettings {
+        path_following: PathFollowing::ProcessZone,
+        interface_integration: InterfaceIntegration::ImplEx,
+        impl_ex_reject: Some(2.0),
+        ..SolverSettings::default()
+    };
+    let run = |max_step: f64| {
+        let loading = Loading {
+            max_step,
+            ..loading.clone()
+        };
+        let mut record = Record {
+            load_jumps: 0,
+            curve: Vec::new(),
+        };
+        let result = solve_pullout(&m, &laws, &loading, &settings, None, &mut record);
+        assert!(matches!(result.unwrap().ending, Ending::Unloaded { .. }));
+        let work = *solve::energy::external_work(&record.curve).last().unwrap();
+        (record.load_jumps, work)
+    };
+    let (free_jumps, free_work) = run(loading.max_step);
+    let (bounded_jumps, bounded_work) = run(1e-6);
+    assert_eq!(free_jumps, 0);
+    assert!(bounded_jumps > 10, "{bounded_jumps}");
+    assert!(
+        (bounded_work - free_work).abs() < 5e-3 * free_work,
+        "{bounded_work} against {free_work}"
+    );
+}

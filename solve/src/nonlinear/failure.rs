@@ -103,6 +103,12 @@ pub enum StepFailure {
         relative_residual: f64,
         regimes: RegimeChanges,
     },
+    /// A process-zone step converged with λ moved further than
+    /// `loading.max_step`: the zone's jumps hardly respond to λ there, so
+    /// the start state's own imbalance (IMPL-EX's error of the last step)
+    /// sends λ far; the step is taken under displacement control.
+    #[error("the process zone's step moved the imposed displacement by {increment:e} m, more than loading.max_step {limit:e} m: the step is taken under displacement control")]
+    LoadJump { increment: f64, limit: f64 },
     /// The step converged, but its IMPL-EX extrapolation error (the
     /// relative residual of its displacement under the implicit damage) is
     /// above `impl_ex_reject` × `impl_ex_tolerance`: redone shorter.

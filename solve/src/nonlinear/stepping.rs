@@ -105,6 +105,10 @@ struct Path {
     last_load_increment: f64,
     /// Whether the steel's plastic strain grew in the last converged step.
     steel_yielding: bool,
+    /// The next step is taken under displacement control after a
+    /// process-zone attempt moved λ too far ([`StepFailure::LoadJump`]);
+    /// cleared when a step converges.
+    zone_paused: bool,
 }
 
 impl Path {
@@ -345,6 +349,7 @@ impl<'a> Driver<'a> {
             load: 0.0,
             last_load_increment: 0.0,
             steel_yielding: false,
+            zone_paused: false,
         }
     }
 
@@ -388,6 +393,7 @@ impl<'a> Driver<'a> {
             load: cp.generalised_load,
             last_load_increment: cp.last_load_increment,
             steel_yielding: false,
+            zone_paused: false,
         })
     }
 
@@ -431,7 +437,7 @@ impl<'a> Driver<'a> {
             .then(|| self.process_zone(path))
             .flatten();
         match (&zone, path.mode) {
-            (Some((_, moved)), ControlMode::Displacement) if dl > 0.0 => {
+            (Some((_, moved)), ControlMode::Displacement) if dl > 0.0 && !path.zone_paused => {
                 path.mode = ControlMode::ProcessZone;
                 path.next_step *= moved / dl;
             }
@@ -674,13 +680,13 @@ impl<'a> Driver<'a> {
         summary.factorisations = self.ws.lin.factorisations;
         summary.pcg_iterations = self.ws.lin.pcg_iterations;
         summary.krylov_iterations = self.ws.lin.krylov_iterations;
-        let impl_ex_residual = match attempt.failure {
-            None => self.implicit_history(&path.committed, &u_trial, &mut step_wall)?,
-            Some(_) => None,
-        };
-        if let Some(e) = impl_ex_residual {
-            attempt.failure = self.rejection(&mut path, &plan, e);
-        }
+        let impl_ex_residual = self.review(
+            &mut path,
+            &plan,
+            (&u_trial, lambda),
+            &mut attempt,
+            &mut step_wall,
+        )?;
         if attempt.failure.is_none() {
             let path = self.commit(
                 path,
@@ -819,6 +825,7 @@ impl<'a> Driver<'a> {
         let load = generalised_load(&self.rates, &self.ws.f_int);
         path.last_load_increment = load - path.load;
         path.load = load;
+        path.zone_paused = false;
         path.u = u;
         std::mem::swap(&mut path.committed, &mut self.ws.trial);
         path.steel_yielding =
@@ -1010,6 +1017,41 @@ impl<'a> Driver<'a> {
         })
     }
 
+    /// Whether a converged attempt ending at (`u`, `lambda`) is kept: not
+    /// when a process-zone step moved λ too far, nor when its IMPL-EX
+    /// error passes the rejection limit (the failure is set in
+    /// `attempt`). Returns that error, evaluated after the implicit
+    /// history.
+    fn review(
+        &mut self,
+        path: &mut Path,
+        plan: &Plan,
+        (u, lambda): (&[f64], f64),
+        attempt: &mut Attempt,
+        step_wall: &mut WallTimes,
+    ) -> Result<Option<f64>, SolveError> {
+        if attempt.failure.is_none() {
+            attempt.failure = self.load_jump(path, plan, lambda);
+        }
+        if attempt.failure.is_some() {
+            return Ok(None);
+        }
+        let e = self.implicit_history(&path.committed, u, step_wall)?;
+        if let Some(e) = e {
+            attempt.failure = self.rejection(path, plan, e);
+        }
+        Ok(e)
+    }
+
+    /// The failure of a converged process-zone step that moved λ to
+    /// `lambda`, further than `loading.max_step` from the last one.
+    fn load_jump(&self, path: &Path, plan: &Plan, lambda: f64) -> Option<StepFailure> {
+        let increment = lambda - path.lambda;
+        let limit = self.loading.max_step;
+        (plan.mode == ControlMode::ProcessZone && increment.abs() > limit)
+            .then_some(StepFailure::LoadJump { increment, limit })
+    }
+
     /// Whether `plan` is a step of the smallest size of its kind (which
     /// cannot be shortened).
     fn at_min_step(&self, path: &Path, plan: &Plan) -> bool {
@@ -1043,7 +1085,14 @@ impl<'a> Driver<'a> {
         }
         let reason = attempt.failure.expect("a failed attempt");
         path.summary.cutbacks += 1;
-        let next = plan.size * loading.cutback;
+        let load_jump = matches!(reason, StepFailure::LoadJump { .. });
+        let next = if load_jump {
+            path.last_lambda_increment
+                .abs()
+                .clamp(loading.min_step, loading.max_step)
+        } else {
+            plan.size * loading.cutback
+        };
         self.ws.trial.clone_from(&path.committed);
         let step = path.rows.len() + 1;
         observer.cutback(&Cutback {
@@ -1054,6 +1103,12 @@ impl<'a> Driver<'a> {
             reason: reason.clone(),
             residual_history: attempt.history.clone(),
         });
+        if load_jump {
+            path.mode = ControlMode::Displacement;
+            path.zone_paused = true;
+            path.next_step = next;
+            return Ok(Outcome::Continue(path));
+        }
         let (released, work) = path.last_energies();
         // `auto` hands over only where displacement control would stop (at
         // the minimum step), so that every run it carries to the end keeps
