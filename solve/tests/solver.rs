@@ -2252,7 +2252,7 @@ fn process_zone_hands_steps_that_move_the_load_far_to_displacement_control() {
     let run = |max_step: f64| {
         let loading = Loading {
             max_step,
-            ..loading.clone()
+            ..loading
         };
         let mut record = Record {
             load_jumps: 0,
