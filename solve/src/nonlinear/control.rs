@@ -46,10 +46,6 @@ pub(crate) struct Quantity {
 
 impl Quantity {
     pub(crate) fn new(weights: Vec<(usize, f64)>, dofs: &DofMap, dirichlet: &Dirichlet) -> Self {
-        let free = weights
-            .iter()
-            .filter_map(|&(d, w)| dofs.signed_index(d).map(|(f, sign)| (f, sign * w)))
-            .collect();
         let per_lambda = dirichlet
             .dofs
             .iter()
@@ -62,24 +58,16 @@ impl Quantity {
                     .sum::<f64>()
             })
             .sum();
-        Self {
-            weights,
-            free,
-            per_lambda,
-        }
+        Self::with_weights(weights, per_lambda, dofs)
     }
     /// The quantity whose weight on global DOF d is `dense[d]` (zeros
     /// skipped).
     pub(crate) fn from_dense(dense: &[f64], dofs: &DofMap, dirichlet: &Dirichlet) -> Self {
-        let weights: Vec<(usize, f64)> = dense
+        let weights = dense
             .iter()
             .enumerate()
             .filter(|(_, &w)| w != 0.0)
             .map(|(d, &w)| (d, w))
-            .collect();
-        let free = weights
-            .iter()
-            .filter_map(|&(d, w)| dofs.signed_index(d).map(|(f, sign)| (f, sign * w)))
             .collect();
         let per_lambda = dirichlet
             .dofs
@@ -87,6 +75,13 @@ impl Quantity {
             .zip(&dirichlet.rate)
             .map(|(&d, r)| dense[d] * r)
             .sum();
+        Self::with_weights(weights, per_lambda, dofs)
+    }
+    fn with_weights(weights: Vec<(usize, f64)>, per_lambda: f64, dofs: &DofMap) -> Self {
+        let free = weights
+            .iter()
+            .filter_map(|&(d, w)| dofs.signed_index(d).map(|(f, sign)| (f, sign * w)))
+            .collect();
         Self {
             weights,
             free,

@@ -450,68 +450,70 @@ impl<'a> Driver<'a> {
             }
             _ => {}
         }
-        let by_lambda = |h: f64| {
-            let size = h.min(loading.u_final - path.lambda);
-            Plan {
-                mode: ControlMode::Displacement,
-                size,
-                target: path.lambda + size,
-                scale: if dl > 0.0 { size / dl } else { 0.0 },
-                zone: None,
-            }
-        };
         match path.mode {
             ControlMode::ProcessZone => {
                 let (quantity, moved) = zone.expect("a process zone");
                 let size = path.next_step;
                 let scale = size / moved;
-                if let Some(stop) = loading.fed_stop {
-                    let fed = self.fed.value(&path.u);
-                    if fed + scale * df >= stop {
-                        return self.by_fed(path, stop - fed, df);
-                    }
-                }
-                if path.lambda + scale * dl >= loading.u_final {
-                    return by_lambda(loading.u_final - path.lambda);
-                }
-                Plan {
+                self.landing(path, scale).unwrap_or_else(|| Plan {
                     mode: ControlMode::ProcessZone,
                     size,
                     target: quantity.value(&path.u) + size,
                     scale,
                     zone: Some(quantity),
-                }
+                })
             }
-            ControlMode::Displacement => by_lambda(path.next_step),
+            ControlMode::Displacement => self.by_lambda(path, path.next_step),
             ControlMode::Energy => {
                 let (released, _) = path.last_energies();
                 let size = path.next_step;
                 let scale = if released > 0.0 { size / released } else { 0.0 };
-                let fed = self.fed.value(&path.u);
-                if let Some(stop) = loading.fed_stop {
-                    if fed + scale * df >= stop {
-                        return self.by_fed(path, stop - fed, df);
-                    }
-                }
-                if path.lambda + scale * dl >= loading.u_final {
-                    return by_lambda(loading.u_final - path.lambda);
-                }
-                Plan {
+                self.landing(path, scale).unwrap_or(Plan {
                     mode: ControlMode::Energy,
                     size,
                     target: size,
                     scale,
                     zone: None,
-                }
+                })
             }
             ControlMode::FreeEnd => {
                 let plan = self.by_fed(path, path.next_step, df);
                 if path.lambda + plan.scale * dl >= loading.u_final {
-                    return by_lambda(loading.u_final - path.lambda);
+                    return self.by_lambda(path, loading.u_final - path.lambda);
                 }
                 plan
             }
         }
+    }
+
+    /// A step prescribing λ `h` further (at most to `u_final`).
+    fn by_lambda(&self, path: &Path, h: f64) -> Plan {
+        let dl = path.last_lambda_increment;
+        let size = h.min(self.loading.u_final - path.lambda);
+        Plan {
+            mode: ControlMode::Displacement,
+            size,
+            target: path.lambda + size,
+            scale: if dl > 0.0 { size / dl } else { 0.0 },
+            zone: None,
+        }
+    }
+
+    /// The last step of an indirectly controlled run: where a step
+    /// repeating `scale` times the last increment would pass `fed_stop`, a
+    /// step to it under FED control; where it would pass `u_final`, a
+    /// step to it under displacement control.
+    fn landing(&self, path: &Path, scale: f64) -> Option<Plan> {
+        let df = self.last_fed_increment(path);
+        if let Some(stop) = self.loading.fed_stop {
+            let fed = self.fed.value(&path.u);
+            if fed + scale * df >= stop {
+                return Some(self.by_fed(path, stop - fed, df));
+            }
+        }
+        let u_final = self.loading.u_final;
+        (path.lambda + scale * path.last_lambda_increment >= u_final)
+            .then(|| self.by_lambda(path, u_final - path.lambda))
     }
 
     /// The process zone's jump quantity and its value for the last
