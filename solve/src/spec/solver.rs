@@ -313,9 +313,11 @@ pub enum PathFollowing {
     /// along their last increments, their r.m.s. over the zone in metres,
     /// and λ is an unknown: a local arc-length (Geers, IJNME 46, 1999)
     /// that follows snap-backs in λ and in the FED. Its constraint is
-    /// linear in the step's displacement and bounds each point's damage
-    /// increment, which is what the IMPL-EX interface's error depends on.
-    /// Back to displacement control in a step after which no point softens.
+    /// linear in the step's displacement and bounds the zone's jump
+    /// increments, on which the IMPL-EX interface's error depends. Back to
+    /// displacement control after a step in which no point softened, and
+    /// for a step in which the zone would move λ by more than
+    /// `loading.max_step`.
     ProcessZone,
     /// Displacement control until it fails at the minimum step after a
     /// step that dissipated (a snap-back: no equilibrium at a larger λ);
