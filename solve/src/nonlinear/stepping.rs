@@ -446,7 +446,7 @@ impl<'a> Driver<'a> {
                 // zone's constraint to hold; λ takes the steps again, as
                 // long as the last one moved it.
                 path.mode = ControlMode::Displacement;
-                path.next_step = dl.abs().clamp(self.loading.min_step, self.loading.max_step);
+                path.next_step = self.lambda_step(path);
             }
             _ => {}
         }
@@ -484,6 +484,15 @@ impl<'a> Driver<'a> {
                 plan
             }
         }
+    }
+
+    /// The size of a displacement-controlled step that takes over from
+    /// the process zone's control: the last step's |Δλ| within the
+    /// loading's bounds.
+    fn lambda_step(&self, path: &Path) -> f64 {
+        path.last_lambda_increment
+            .abs()
+            .clamp(self.loading.min_step, self.loading.max_step)
     }
 
     /// A step prescribing λ `h` further (at most to `u_final`).
@@ -1089,9 +1098,7 @@ impl<'a> Driver<'a> {
         path.summary.cutbacks += 1;
         let load_jump = matches!(reason, StepFailure::LoadJump { .. });
         let next = if load_jump {
-            path.last_lambda_increment
-                .abs()
-                .clamp(loading.min_step, loading.max_step)
+            self.lambda_step(&path)
         } else {
             plan.size * loading.cutback
         };
