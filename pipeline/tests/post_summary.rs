@@ -211,6 +211,35 @@ fn residual_is_fed_weighted() {
     assert!(close(r, 5e6, 1e-12), "{r}");
 }
 
+/// A curve whose FED snaps back stays within σ_mb's range: the window is
+/// the tail since the curve last entered it, from above as well as from
+/// below. A brittle split that drops the FED to near zero in one step has
+/// no window length left, and the last σ_mb is the residual (before, the
+/// whole curve's area over a window of 3e-10 m: 6.8e11 Pa on such a run).
+#[test]
+fn residual_of_a_curve_whose_fed_snaps_back() {
+    // Rises to 24 MPa at FED 0.058 mm, splits: FED 1.5e-6 mm, σ 0.27 kPa.
+    let split = rows_mm_mpa(&[(0.02, 10.0), (0.058, 24.0), (1.5e-6, 2.7e-4)]);
+    let r = residual_bond_stress(&split, 0.2).unwrap();
+    assert!(close(r, 270.0, 1e-12), "{r}");
+    // Past 4 mm the FED falls back to 3 and rises to 3.5 mm, σ 2 → 1 MPa
+    // linearly on the way back and 1 MPa after: window [2.8, 3.5] mm, the
+    // part of the way back from 3.5 to 3 mm and the rise to 3.5 mm.
+    let back = rows_mm_mpa(&[(2.0, 4.0), (4.0, 2.0), (3.0, 1.0), (3.5, 1.0)]);
+    let r = residual_bond_stress(&back, 0.2).unwrap();
+    // From 3.5 down to 3 mm: σ from 1.5 to 1 MPa (mean 1.25) over 0.5 mm;
+    // then 1 MPa over 0.5 mm.
+    assert!(close(r, 1.125e6, 1e-12), "{r}");
+    for rows in [&split, &back] {
+        let lo = rows
+            .iter()
+            .map(|r| r.bond_stress)
+            .fold(f64::INFINITY, f64::min);
+        let hi = rows.iter().map(|r| r.bond_stress).fold(0.0, f64::max);
+        let r = residual_bond_stress(rows, 0.5).unwrap();
+        assert!((lo..=hi).contains(&r), "{r} outside [{lo}, {hi}]");
+    }
+}
 /// An energy limit past the end of the curve is reported, not extrapolated;
 /// invalid options are refused.
 #[test]

@@ -169,10 +169,14 @@ pub fn energy_to_fed(rows: &[CurveRow], fed_limit: f64) -> Result<f64, PostError
 }
 
 /// Residual σ_mb (Pa): the mean of σ_mb over the window
-/// [(1 − f)·FED_end, FED_end] of the curve's tail, i.e.
-/// (1 / (f·FED_end)) ∫ σ_mb dFED over the steps after the curve last
-/// entered the window. An FED-weighted mean, so it does not depend on how
-/// densely the solver stepped.
+/// [(1 − f)·FED_end, FED_end] along the curve's tail, i.e.
+/// ∫ σ_mb |dFED| / ∫ |dFED| over the steps since the curve last entered the
+/// window (from below, or from above after a snap-back in FED). An
+/// FED-weighted mean, so it does not depend on how densely the solver
+/// stepped; on a tail that rises monotonically it is
+/// (1 / (f·FED_end)) ∫ σ_mb dFED. A tail that enters the window at its
+/// end (a curve whose FED snaps back to near zero in one step) has no
+/// length to average over, and its last σ_mb is the residual.
 pub fn residual_bond_stress(rows: &[CurveRow], fraction: f64) -> Result<f64, PostError> {
     check_rows(rows)?;
     if !(fraction > 0.0 && fraction <= 1.0) {
@@ -189,23 +193,31 @@ pub fn residual_bond_stress(rows: &[CurveRow], fraction: f64) -> Result<f64, Pos
         ));
     }
     let lower = (1.0 - fraction) * end;
+    let inside = |fed: f64| (lower..=end).contains(&fed);
     let v: Vec<(f64, f64)> = vertices(rows).collect();
-    let mut integral = 0.0;
+    let (mut integral, mut length) = (0.0, 0.0);
     for i in (1..v.len()).rev() {
         let (fed0, s0) = v[i - 1];
         let (fed1, s1) = v[i];
-        if fed0 <= lower {
-            // The window starts inside this segment (or at its start).
-            if fed1 > lower {
-                let t = (lower - fed0) / (fed1 - fed0);
-                let s_low = s0 + t * (s1 - s0);
-                integral += 0.5 * (s_low + s1) * (fed1 - lower);
-            }
-            break;
+        if inside(fed0) {
+            integral += 0.5 * (s0 + s1) * (fed1 - fed0).abs();
+            length += (fed1 - fed0).abs();
+            continue;
         }
-        integral += 0.5 * (s0 + s1) * (fed1 - fed0);
+        // The tail enters the window inside this segment, across the
+        // bound on fed0's side.
+        let bound = if fed0 < lower { lower } else { end };
+        let t = (bound - fed0) / (fed1 - fed0);
+        let s_bound = s0 + t * (s1 - s0);
+        integral += 0.5 * (s_bound + s1) * (fed1 - bound).abs();
+        length += (fed1 - bound).abs();
+        break;
     }
-    Ok(integral / (end - lower))
+    Ok(if length > 0.0 {
+        integral / length
+    } else {
+        rows[rows.len() - 1].bond_stress
+    })
 }
 
 /// Fraction of the running maximum σ_mb must fall below for that maximum to
