@@ -358,6 +358,8 @@ fn step_limit_keeps_the_converged_steps() {
         serde_json::from_str(&read(&work.join("tiny-smooth/solve.json"))).unwrap();
     assert_eq!(solve["completed"], false);
     assert!(solve["stopped"].as_str().unwrap().contains("max_steps"));
+    // Not one of the endings of a run that got to its end.
+    assert!(solve["ending"].is_null(), "{solve}");
     assert!(work.join("tiny-smooth/plots/bond_slip.png").is_file());
     let again = text(&ribbar(&args));
     assert!(

@@ -376,7 +376,9 @@ pub fn run(ctx: &Ctx, out: &Path) -> Result<()> {
     let solve_json = serde_json::json!({
         "summary": result.summary,
         "completed": stopped.is_none(),
-        "ending": result.ending,
+        // A run stopped for a numerical reason has not ended in any of
+        // the ways `ending` names.
+        "ending": stopped.is_none().then_some(&result.ending),
         "stopped": stopped,
         "cutbacks": observer.cutbacks,
         "energy_check": energy_check,
