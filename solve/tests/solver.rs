@@ -1469,6 +1469,59 @@ impl Observer for Trace {
 /// displacement and on to the end (SPEC §6 path-following), from the
 /// start (`energy`) or from where displacement control stops (`auto`,
 /// with `interface_holds`).
+/// Dissipation control's steps are energies: they grow after easy steps
+/// up to the work of the load over `loading.max_step`, not up to
+/// `max_step` itself read as joules. With that reading a holdout case
+/// (a herringbone bar on a stiff interface, `docs/stress-sweep.md`) crept
+/// back along its snap-back at 2e-5 J a step, ~0.1 µm of λ, and stalled
+/// after 100 such steps; sized by the load it follows the snap-back in a
+/// dozen steps and completes.
+#[test]
+fn dissipation_control_steps_are_capped_by_the_work_over_the_largest_step() {
+    let (m, laws, mut loading) = snap_back_case();
+    loading.initial_step = 1e-7;
+    loading.max_step = 1e-7;
+    let settings = SolverSettings {
+        path_following: PathFollowing::Energy,
+        ..SolverSettings::default()
+    };
+    struct Sizes(Vec<(f64, f64)>);
+    impl Observer for Sizes {
+        fn step_converged(&mut self, r: &StepReport, _: &CommittedView<'_>) {
+            self.0.push((r.row.u_imposed, r.step_size));
+        }
+    }
+    let mut sizes = Sizes(Vec::new());
+    let res = solve_pullout(&m, &laws, &loading, &settings, None, &mut sizes).unwrap();
+    assert!(
+        matches!(res.ending, Ending::Unloaded { .. }),
+        "{:?}",
+        res.ending
+    );
+    // A displacement-controlled step's size is its Δλ; the others are
+    // dissipation-controlled, their sizes in joules.
+    let mut energy_steps = Vec::new();
+    let mut lambda = 0.0;
+    for &(u, size) in &sizes.0 {
+        if ((u - lambda) - size).abs() > 1e-9 * size.max(1e-12) {
+            energy_steps.push(size);
+        }
+        lambda = u;
+    }
+    // After the smallest (a cut-back's), the steps grow again: measured
+    // up to 7.8e-7 J (½|F| · 1e-7 m); read as joules, `max_step` held
+    // them at 1.3e-7 J (growth once past 1e-7, then no more).
+    let smallest = (0..energy_steps.len())
+        .min_by(|&a, &b| energy_steps[a].total_cmp(&energy_steps[b]))
+        .expect("dissipation-controlled steps");
+    let regrown = energy_steps[smallest..].iter().copied().fold(0.0, f64::max);
+    assert!(
+        regrown > 3.0 * loading.growth * loading.max_step,
+        "dissipation steps after the smallest reach {regrown} J, max_step {} m: {energy_steps:?}",
+        loading.max_step
+    );
+}
+
 #[test]
 fn dissipation_control_follows_a_snap_back() {
     let (m, laws, loading) = snap_back_case();

@@ -866,7 +866,7 @@ impl<'a> Driver<'a> {
         } else if attempt.iterations <= loading.easy_iterations {
             self.rewind = None;
             path.next_step = (plan.size * loading.growth)
-                .min(loading.max_step)
+                .min(self.max_step(&path, plan))
                 .max(path.next_step);
         } else if attempt.force_only && self.explicit_interface {
             // Ended on its best iterate (friction points chattering; the
@@ -876,7 +876,7 @@ impl<'a> Driver<'a> {
             // as after an easy one, and a failure cuts it back. Not for
             // the implicit interface, whose runs keep their curves
             // (docs/solver.md, "IMPL-EX interface").
-            path.next_step = (plan.size * loading.growth).min(loading.max_step);
+            path.next_step = (plan.size * loading.growth).min(self.max_step(&path, plan));
         } else {
             path.next_step = plan.size;
         }
@@ -1074,6 +1074,16 @@ impl<'a> Driver<'a> {
         match plan.mode {
             ControlMode::Energy => self.energy_floor(path),
             _ => self.loading.min_step,
+        }
+    }
+
+    /// The largest step of `plan`'s kind: under dissipation control the
+    /// work of the load over `loading.max_step` (as the floor is over
+    /// `min_step`), not the length itself read as joules.
+    fn max_step(&self, path: &Path, plan: &Plan) -> f64 {
+        match plan.mode {
+            ControlMode::Energy => 0.5 * path.load.abs() * self.loading.max_step,
+            _ => self.loading.max_step,
         }
     }
 
