@@ -376,6 +376,66 @@ fn a_cube_that_splits_at_its_peak_ends_at_a_brittle_failure() {
     std::fs::remove_dir_all(&work).unwrap();
 }
 
+/// A case outside the stress sweep (holdout case 19 of docs/stress-sweep.md:
+/// a stiff, strong, rough interface on widely spaced ribs, a soft bar):
+/// past its peak dissipation control converges steps down the split
+/// branch, λ back to zero and below it at a few per cent of the peak load,
+/// before it stalls. That is the same brittle failure as a stall right at
+/// the peak: the run ends as a result, whose failure load is the largest
+/// force of the curve, at that step's λ.
+#[test]
+fn a_split_followed_down_its_branch_ends_at_a_brittle_failure_at_the_peak() {
+    let work = std::env::temp_dir().join(format!("ribbar-split-branch-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&work);
+    let sets = [
+        "materials.interface.delta_s=0.025",
+        "materials.interface.mu=0.4528",
+        "materials.interface.zeta=7.4",
+        "materials.interface.lambda0=3.96e-6m",
+        "materials.interface.ft=5.85MPa",
+        "materials.interface.Gf=124N/m",
+        "materials.concrete.ft=3.08MPa",
+        "mesh.h_interface=1.5mm",
+        "bar.ribs.angle=46deg",
+        "bar.ribs.height=0.44mm",
+        "bar.ribs.spacing=7.77mm",
+        "materials.steel.sigma_y=150MPa",
+    ];
+    let args: Vec<&str> = sets.iter().flat_map(|s| ["--set", s]).collect();
+    let (out, solve) = run_tiny_ribbed(&work, &args);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_eq!(solve["completed"], true, "{solve}");
+    let ending = &solve["ending"];
+    assert_eq!(ending["kind"], "brittle_failure", "{solve}");
+    let curve = std::fs::read_to_string(work.join("tiny-ribbed/curve.csv")).unwrap();
+    let rows = pipeline::post::parse_curve_csv(&curve, Path::new("curve.csv")).unwrap();
+    let peak = rows
+        .iter()
+        .max_by(|a, b| a.force.total_cmp(&b.force))
+        .unwrap();
+    let last = rows.last().unwrap();
+    // Steps were converged beyond the peak, back below half its λ.
+    assert!(last.step > peak.step, "{solve}");
+    assert!(last.u_imposed < 0.5 * peak.u_imposed, "{last:?} {peak:?}");
+    assert_eq!(ending["force"].as_f64().unwrap(), peak.force);
+    let u_end = ending["u_imposed"].as_f64().unwrap();
+    assert!(
+        (u_end - peak.u_imposed).abs() <= 1e-12 * peak.u_imposed,
+        "{u_end} {peak:?}"
+    );
+    assert!(ending["snap_back_to"].as_f64().unwrap() < 0.5 * peak.u_imposed);
+    let (growing, concrete) = (
+        ending["damaging_concrete_tets"].as_u64().unwrap(),
+        ending["concrete_tets"].as_u64().unwrap(),
+    );
+    assert!(100 * growing >= concrete, "{solve}");
+    std::fs::remove_dir_all(&work).unwrap();
+}
+
 /// The multigrid-preconditioned Newton–Krylov solve (real gmsh mesh,
 /// interface elements, softening) converges to the same curve as the
 /// Cholesky-preconditioned one, records its choice, and `auto` keeps the

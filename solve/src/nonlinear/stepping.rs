@@ -1261,6 +1261,13 @@ impl<'a> Driver<'a> {
     /// back towards zero: under a monotone imposed displacement the
     /// specimen fails dynamically at that step, so there is no
     /// quasi-static continuation and its force is the failure load.
+    ///
+    /// Dissipation control may also converge some steps down that branch
+    /// before it stalls (λ back near zero or below it, the load a few per
+    /// cent of the peak): the split then began at the step of the largest
+    /// force, whose force is the failure load, and the stall counts as the
+    /// same ending once the attempt's λ is below [`SNAP_BACK`] of that
+    /// step's λ.
     fn brittle_failure(
         &self,
         path: &Path,
@@ -1270,10 +1277,23 @@ impl<'a> Driver<'a> {
     ) -> Option<Ending> {
         let last = path.rows.last()?;
         let (damaging, concrete) = self.spreading_damage(reason)?;
-        let snapped_back = plan.mode == ControlMode::Energy && lambda < SNAP_BACK * path.lambda;
-        snapped_back.then_some(Ending::BrittleFailure {
-            force: last.force,
-            u_imposed: path.lambda,
+        if plan.mode != ControlMode::Energy {
+            return None;
+        }
+        let peak = path.rows.iter().fold(
+            last,
+            |a, r| if r.force.abs() > a.force.abs() { r } else { a },
+        );
+        let (force, u_imposed) = if lambda < SNAP_BACK * path.lambda {
+            (last.force, path.lambda)
+        } else if lambda < SNAP_BACK * peak.u_imposed {
+            (peak.force, peak.u_imposed)
+        } else {
+            return None;
+        };
+        Some(Ending::BrittleFailure {
+            force,
+            u_imposed,
             snap_back_to: lambda,
             damaging_concrete_tets: damaging,
             concrete_tets: concrete,

@@ -134,9 +134,12 @@ pub enum Ending {
     /// displacement has no quasi-static continuation and the last force is
     /// the failure load.
     BrittleFailure {
-        /// The last converged force (whole specimen), N: the failure load.
+        /// The failure load (whole specimen), N: the force of the last
+        /// converged step, or of the step of the largest force when
+        /// dissipation control converged steps down the split branch
+        /// before it stalled.
         force: f64,
-        /// Imposed displacement of the last converged step, m.
+        /// Imposed displacement of that step, m.
         u_imposed: f64,
         /// The imposed displacement the dissipation-controlled attempt
         /// fell back to, m.
