@@ -3,14 +3,18 @@
 # specs/studies/stress-sweep.yaml (each case a child `ribbar run`, so a
 # failing case cannot take the others down), then builds docs/stress-sweep.md
 # from the cases' curve.csv, solve.json and logs.
-# Usage: scripts/stress-sweep.sh [WORK_DIR] [JOBS]
+# Usage: scripts/stress-sweep.sh [WORK_DIR] [JOBS] [STUDY]
+# STUDY defaults to specs/studies/stress-sweep.yaml; the table goes to
+# docs/<study file name>.md (specs/studies/stress-holdout.yaml: the holdout
+# cases, docs/stress-holdout.md).
 set -u
 cd "$(dirname "$0")/.."
 WORK="${1:-ribbar-work}"
 JOBS="${2:-2}"
-STUDY=specs/studies/stress-sweep.yaml
+STUDY="${3:-specs/studies/stress-sweep.yaml}"
+OUT="docs/$(basename "$STUDY" .yaml).md"
 cargo build --release -p pipeline --bin ribbar --example stress_report || exit 1
 # The study exits non-zero when cases stop early; the table says why.
 ./target/release/ribbar study "$STUDY" --work "$WORK" -j "$JOBS" || true
-./target/release/examples/stress_report "$STUDY" "$WORK" docs/stress-sweep.md \
-  "scripts/stress-sweep.sh $WORK $JOBS"
+./target/release/examples/stress_report "$STUDY" "$WORK" "$OUT" \
+  "scripts/stress-sweep.sh $WORK $JOBS${3:+ $STUDY}"
