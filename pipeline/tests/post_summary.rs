@@ -240,6 +240,7 @@ fn residual_of_a_curve_whose_fed_snaps_back() {
         assert!((lo..=hi).contains(&r), "{r} outside [{lo}, {hi}]");
     }
 }
+
 /// An energy limit past the end of the curve is reported, not extrapolated;
 /// invalid options are refused.
 #[test]

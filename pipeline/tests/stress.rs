@@ -376,7 +376,7 @@ fn a_cube_that_splits_at_its_peak_ends_at_a_brittle_failure() {
     std::fs::remove_dir_all(&work).unwrap();
 }
 
-/// A case outside the stress sweep (holdout case 19 of docs/stress-sweep.md:
+/// A case outside the stress sweep (case 19 of docs/stress-holdout.md:
 /// a stiff, strong, rough interface on widely spaced ribs, a soft bar):
 /// past its peak dissipation control converges steps down the split
 /// branch, λ back to zero and below it at a few per cent of the peak load,

@@ -1463,19 +1463,13 @@ impl Observer for Trace {
     }
 }
 
-/// Where the bond's softening releases more energy than the bar can take
-/// back, displacement control finds no equilibrium past the peak and
-/// stops; dissipation control follows the path back in the imposed
-/// displacement and on to the end (SPEC §6 path-following), from the
-/// start (`energy`) or from where displacement control stops (`auto`,
-/// with `interface_holds`).
 /// Dissipation control's steps are energies: they grow after easy steps
 /// up to the work of the load over `loading.max_step`, not up to
-/// `max_step` itself read as joules. With that reading a holdout case
-/// (a herringbone bar on a stiff interface, `docs/stress-sweep.md`) crept
-/// back along its snap-back at 2e-5 J a step, ~0.1 µm of λ, and stalled
-/// after 100 such steps; sized by the load it follows the snap-back in a
-/// dozen steps and completes.
+/// `max_step` itself read as joules. With that reading case 9 of
+/// `docs/stress-holdout.md` (a herringbone bar on a stiff interface)
+/// crept back along its snap-back at 2e-5 J a step, ~0.1 µm of λ, and
+/// stalled after 100 such steps; sized by the load it follows the
+/// snap-back in a few steps and completes.
 #[test]
 fn dissipation_control_steps_are_capped_by_the_work_over_the_largest_step() {
     let (m, laws, mut loading) = snap_back_case();
@@ -1522,6 +1516,12 @@ fn dissipation_control_steps_are_capped_by_the_work_over_the_largest_step() {
     );
 }
 
+/// Where the bond's softening releases more energy than the bar can take
+/// back, displacement control finds no equilibrium past the peak and
+/// stops; dissipation control follows the path back in the imposed
+/// displacement and on to the end (SPEC §6 path-following), from the
+/// start (`energy`) or from where displacement control stops (`auto`,
+/// with `interface_holds`).
 #[test]
 fn dissipation_control_follows_a_snap_back() {
     let (m, laws, loading) = snap_back_case();
