@@ -1,6 +1,7 @@
 //! Studies: a base scene spec plus lists of values for any keys, expanded
-//! into cases (cartesian product or zipped lists), or a mesh-convergence
-//! series over one size key.
+//! into cases (cartesian product or zipped lists), or a convergence series
+//! over one size key (a mesh size, or a step size with the keys that scale
+//! with it zipped after it).
 //!
 //! ```yaml
 //! name: r1-delta-s
@@ -191,9 +192,10 @@ fn parameter_lists(
             "parameters: at least one key with a list of values".into(),
         ));
     }
-    if raw.kind == StudyKind::Convergence && keys.len() != 1 {
+    if raw.kind == StudyKind::Convergence && keys.len() > 1 && raw.combine != Combine::Zip {
         return Err(invalid(format!(
-            "parameters: a convergence study varies one size key (e.g. mesh.h_interface), found {}",
+            "parameters: a convergence study varies one size key (e.g. mesh.h_interface or \
+             loading.max_step), or several with combine: zip (the first is the size), found {}",
             keys.len()
         )));
     }
@@ -204,7 +206,31 @@ fn parameter_lists(
             lists[0].len()
         )));
     }
+    if raw.kind == StudyKind::Convergence {
+        for value in &lists[0] {
+            size_of(&keys[0], value).map_err(invalid)?;
+        }
+    }
     Ok((keys, lists))
+}
+
+/// A convergence study's grid size, m: the value of its first key as a
+/// length (a mesh size, or a step size); the message names the key.
+pub fn size_of(key: &str, value: &serde_yaml::Value) -> Result<f64, String> {
+    let field = format!("parameters.{key}");
+    let bad = |why: String| {
+        format!("{field}: a convergence study's size must be a positive length: {why}")
+    };
+    let raw: geom::units::RawQuantity =
+        serde_yaml::from_value(value.clone()).map_err(|e| bad(e.to_string()))?;
+    let h = raw
+        .to_si(geom::units::Dim::Length, &field)
+        .map_err(|e| bad(e.to_string()))?;
+    if h > 0.0 {
+        Ok(h)
+    } else {
+        Err(bad(format!("{h} m")))
+    }
 }
 
 /// One list of values per case: the lists side by side (`zip`) or every
@@ -280,6 +306,42 @@ mod tests {
             .unwrap_err()
             .to_string()
             .contains("at least 3 grids"));
+        // A step-size series: the size first, the keys that scale with it
+        // zipped after it.
+        let p = write(
+            &dir,
+            "steps.yaml",
+            "name: t\nbase: base.yaml\nkind: convergence\ncombine: zip\nparameters:\n  \
+             loading.max_step: [20 um, 10 um, 5 um]\n  loading.initial_step: [5 um, 2.5 um, 1.25 um]\n",
+        );
+        let s = Study::load(&p).unwrap();
+        let sizes: Vec<f64> = s
+            .cases
+            .iter()
+            .map(|c| size_of(&c.parameters[0].0, &c.parameters[0].1).unwrap())
+            .collect();
+        for (h, expected) in sizes.iter().zip([20e-6, 10e-6, 5e-6]) {
+            assert!((h / expected - 1.0).abs() < 1e-12, "{sizes:?}");
+        }
+        let p = write(
+            &dir,
+            "product.yaml",
+            "name: t\nbase: base.yaml\nkind: convergence\nparameters:\n  \
+             loading.max_step: [20 um, 10 um, 5 um]\n  loading.initial_step: [5 um, 2 um, 1 um]\n",
+        );
+        let err = Study::load(&p).unwrap_err().to_string();
+        assert!(err.contains("combine: zip"), "{err}");
+        let p = write(
+            &dir,
+            "tol.yaml",
+            "name: t\nbase: base.yaml\nkind: convergence\nparameters:\n  \
+             solver.impl_ex_tolerance: [3e-2, 1.5e-2, \"x\"]\n",
+        );
+        let err = Study::load(&p).unwrap_err().to_string();
+        assert!(
+            err.contains("parameters.solver.impl_ex_tolerance") && err.contains("length"),
+            "{err}"
+        );
         std::fs::remove_dir_all(&dir).unwrap();
     }
 

@@ -185,6 +185,7 @@ pub fn collect(study: &Study, work: &Path, out: &Path, printer: &Printer) -> Res
     let mut curves: Vec<(String, Vec<CurveRow>)> = Vec::new();
     let mut cases: Vec<StudyCase> = Vec::new();
     let mut grids: Vec<(f64, serde_json::Value)> = Vec::new();
+    let mut grid_curves: Vec<(f64, Vec<CurveRow>)> = Vec::new();
     for case in &study.cases {
         let dir = work.join(&case.name);
         let (Ok(rows), Ok(summary)) = (
@@ -213,8 +214,10 @@ pub fn collect(study: &Study, work: &Path, out: &Path, printer: &Printer) -> Res
             &summary,
         ));
         if study.kind == StudyKind::Convergence {
-            let scene = crate::scene::Scene::load(&study.base, &case.overrides)?;
-            grids.push((scene.mesh.h_interface, summary.clone()));
+            let (key, value) = &case.parameters[0];
+            let h = crate::study::size_of(key, value).map_err(anyhow::Error::msg)?;
+            grids.push((h, summary.clone()));
+            grid_curves.push((h, rows.clone()));
         }
         curves.push((label, rows));
     }
@@ -233,6 +236,7 @@ pub fn collect(study: &Study, work: &Path, out: &Path, printer: &Printer) -> Res
     )?;
     if study.kind == StudyKind::Convergence {
         convergence(&grids, out)?;
+        curve_distances(&mut grid_curves, out)?;
     }
     printer.line(&format!("study tables and plots: {}", out.display()));
     Ok(())
@@ -289,6 +293,41 @@ fn convergence(grids: &[(f64, serde_json::Value)], out: &Path) -> Result<()> {
             &out.join("error_vs_time.svg"),
         )?;
     }
+    Ok(())
+}
+
+/// The relative L2 distance of σ_mb along FED from each grid's curve to
+/// the next finer one's (over their common FED range), appended to
+/// convergence.md and written to curve_distances.csv: for a step-size
+/// series, the curve error of a step against half of it.
+fn curve_distances(grids: &mut [(f64, Vec<CurveRow>)], out: &Path) -> Result<()> {
+    grids.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let mut csv = String::from("h_mm,finer_h_mm,relative_l2_along_fed\n");
+    let mut md = String::from(
+        "\n## Curves\n\nRelative L2 distance of σ_mb along FED from each grid's curve \
+         to the next finer one's, over their common FED range.\n\n\
+         | h_mm | finer h_mm | relative L2 along FED |\n| ---: | ---: | ---: |\n",
+    );
+    for pair in grids.windows(2) {
+        let ((fine_h, fine), (h, coarse)) = (&pair[0], &pair[1]);
+        let distance = post::curve_distance(coarse, fine, post::CurveAxis::Fed, None);
+        let (h, fine_h) = (
+            post::significant(h * 1e3, 6),
+            post::significant(fine_h * 1e3, 6),
+        );
+        let (csv_cell, md_cell) = match distance {
+            Ok(d) => (format!("{d:.4e}"), format!("{d:.4e}")),
+            Err(e) => (String::new(), format!("n/a: {e}")),
+        };
+        csv.push_str(&format!("{h},{fine_h},{csv_cell}\n"));
+        md.push_str(&format!("| {h} | {fine_h} | {md_cell} |\n"));
+    }
+    crate::store::write_atomic(&out.join("curve_distances.csv"), csv.as_bytes())?;
+    let path = out.join("convergence.md");
+    let mut text = std::fs::read_to_string(&path)
+        .with_context(|| format!("{}: cannot read", path.display()))?;
+    text.push_str(&md);
+    crate::store::write_atomic(&path, text.as_bytes())?;
     Ok(())
 }
 
@@ -418,6 +457,48 @@ mod tests {
         assert!((cells[0] - 2.0).abs() < 1e-3, "{first_peak}");
         assert!((cells[1] / 5.7e6 - 1.0).abs() < 1e-3, "{first_peak}");
         assert!(out.join("error_vs_time.png").is_file());
+        std::fs::remove_dir_all(&out).ok();
+    }
+
+    /// Each grid's curve is compared with the next finer one's: σ_mb
+    /// proportional to the FED with a slope 1 + 1000 h gives distances
+    /// |Δslope| / slope_fine, whatever order the cases came in.
+    #[test]
+    fn curve_distances_compare_each_grid_with_the_next_finer() {
+        let out = std::env::temp_dir().join(format!("ribbar-curves-{}", std::process::id()));
+        std::fs::create_dir_all(&out).unwrap();
+        std::fs::write(out.join("convergence.md"), "## Grids\n").unwrap();
+        let slope = |h: f64| 1e9 * (1.0 + 1000.0 * h);
+        let mut grids: Vec<(f64, Vec<CurveRow>)> = [2e-4, 4e-4, 1e-4]
+            .iter()
+            .map(|&h| {
+                let rows = (1..=10)
+                    .map(|i| {
+                        let fed = 1e-4 * i as f64;
+                        CurveRow::new(i, 2.0 * fed, 0.0, fed, slope(h) * fed, 2)
+                    })
+                    .collect();
+                (h, rows)
+            })
+            .collect();
+        curve_distances(&mut grids, &out).unwrap();
+        let csv = std::fs::read_to_string(out.join("curve_distances.csv")).unwrap();
+        let rows: Vec<Vec<f64>> = csv
+            .lines()
+            .skip(1)
+            .map(|l| l.split(',').map(|c| c.parse().unwrap()).collect())
+            .collect();
+        assert_eq!(rows.len(), 2, "{csv}");
+        for (row, (h, fine)) in rows.iter().zip([(2e-4, 1e-4), (4e-4, 2e-4)]) {
+            assert!((row[0] - h * 1e3).abs() < 1e-12 && (row[1] - fine * 1e3).abs() < 1e-12);
+            let expected = (slope(h) - slope(fine)) / slope(fine);
+            assert!((row[2] / expected - 1.0).abs() < 1e-3, "{csv}");
+        }
+        let md = std::fs::read_to_string(out.join("convergence.md")).unwrap();
+        assert!(
+            md.starts_with("## Grids") && md.contains("## Curves"),
+            "{md}"
+        );
         std::fs::remove_dir_all(&out).ok();
     }
 }

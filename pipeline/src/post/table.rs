@@ -146,7 +146,7 @@ fn csv_number(x: f64) -> String {
 
 /// `x` rounded to `digits` significant digits, trailing zeros dropped;
 /// scientific outside [1e-3, 1e6).
-fn significant(x: f64, digits: usize) -> String {
+pub fn significant(x: f64, digits: usize) -> String {
     if x == 0.0 {
         return "0".into();
     }
