@@ -54,7 +54,7 @@ pub enum Command {
     Clean(CleanArgs),
     /// Drive one material point along a loading path (like MFront's mtest).
     Material(MaterialArgs),
-    /// Run a study: a base spec with lists of values, or a mesh-convergence series.
+    /// Run a study: a base spec with lists of values, or a convergence series over a mesh or step size.
     Study(StudyArgs),
     /// Benchmarks: run time against error, written as Markdown tables and plots.
     Bench(BenchArgs),
