@@ -688,13 +688,7 @@ impl StressCase {
                 .unwrap_or("no solve.json and no error in the log")
                 .to_string()
         });
-        let keys: Vec<&str> = case.parameters.iter().map(|(k, _)| k.as_str()).collect();
-        let parameters = case
-            .parameters
-            .iter()
-            .map(|(k, v)| format!("{}={}", short_key(k, &keys), crate::post::value_label(v)))
-            .collect::<Vec<_>>()
-            .join(", ");
+        let parameters = crate::post::parameters_label(&case.parameters);
         StressCase {
             name: case.name.clone(),
             parameters,
@@ -704,20 +698,6 @@ impl StressCase {
             failure,
         }
     }
-}
-
-/// The shortest dotted suffix of `key` that no other of `keys` ends with:
-/// `ft` alone, `interface.ft` and `concrete.ft` when both vary.
-fn short_key<'k>(key: &'k str, keys: &[&str]) -> &'k str {
-    let starts = key.match_indices('.').map(|(i, _)| i + 1);
-    let mut suffixes = starts.rev().map(|i| &key[i..]);
-    suffixes
-        .find(|suffix| {
-            keys.iter()
-                .filter(|&&other| other != key)
-                .all(|other| !other.ends_with(&format!(".{suffix}")) && *other != *suffix)
-        })
-        .unwrap_or(key)
 }
 
 /// Checks every case of a study run by `ribbar study` in `work` and writes
@@ -819,19 +799,6 @@ mod tests {
 
     fn plan() -> Vec<Series> {
         mesh_series_plan(false).unwrap()
-    }
-
-    #[test]
-    fn parameter_labels_are_the_shortest_unique_suffixes() {
-        let keys = [
-            "materials.interface.ft",
-            "materials.concrete.ft",
-            "materials.interface.mu",
-            "mesh.h_interface",
-        ];
-        let labels: Vec<&str> = keys.iter().map(|k| short_key(k, &keys)).collect();
-        assert_eq!(labels, ["interface.ft", "concrete.ft", "mu", "h_interface"]);
-        assert_eq!(short_key("a.b", &["a.b", "b"]), "a.b");
     }
 
     #[test]

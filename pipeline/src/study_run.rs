@@ -185,7 +185,6 @@ pub fn collect(study: &Study, work: &Path, out: &Path, printer: &Printer) -> Res
     let mut curves: Vec<(String, Vec<CurveRow>)> = Vec::new();
     let mut cases: Vec<StudyCase> = Vec::new();
     let mut grids: Vec<(f64, serde_json::Value)> = Vec::new();
-    let mut grid_curves: Vec<(f64, Vec<CurveRow>)> = Vec::new();
     for case in &study.cases {
         let dir = work.join(&case.name);
         let (Ok(rows), Ok(summary)) = (
@@ -196,18 +195,7 @@ pub fn collect(study: &Study, work: &Path, out: &Path, printer: &Printer) -> Res
         };
         let summary: serde_json::Value = serde_json::from_slice(&summary)
             .with_context(|| format!("{}: not valid JSON", dir.join("summary.json").display()))?;
-        let label = case
-            .parameters
-            .iter()
-            .map(|(k, v)| {
-                format!(
-                    "{}={}",
-                    k.rsplit('.').next().unwrap_or(k),
-                    crate::post::value_label(v)
-                )
-            })
-            .collect::<Vec<_>>()
-            .join(", ");
+        let label = post::parameters_label(&case.parameters);
         cases.push(StudyCase::from_summary(
             &case.name,
             &case.parameters,
@@ -217,7 +205,6 @@ pub fn collect(study: &Study, work: &Path, out: &Path, printer: &Printer) -> Res
             let (key, value) = &case.parameters[0];
             let h = crate::study::size_of(key, value).map_err(anyhow::Error::msg)?;
             grids.push((h, summary.clone()));
-            grid_curves.push((h, rows.clone()));
         }
         curves.push((label, rows));
     }
@@ -235,8 +222,13 @@ pub fn collect(study: &Study, work: &Path, out: &Path, printer: &Printer) -> Res
         &out.join("bond_slip.svg"),
     )?;
     if study.kind == StudyKind::Convergence {
-        convergence(&grids, out)?;
-        curve_distances(&mut grid_curves, out)?;
+        // Every case with results has its grid, in the same order.
+        let grid_curves: Vec<(f64, &[CurveRow])> = grids
+            .iter()
+            .zip(&curves)
+            .map(|((h, _), (_, rows))| (*h, rows.as_slice()))
+            .collect();
+        convergence(&grids, &grid_curves, out)?;
     }
     printer.line(&format!("study tables and plots: {}", out.display()));
     Ok(())
@@ -254,7 +246,13 @@ const CONVERGENCE_QUANTITIES: [(&str, &str); 5] = [
     ("energy", "/curve/energy"),
 ];
 
-fn convergence(grids: &[(f64, serde_json::Value)], out: &Path) -> Result<()> {
+/// convergence.{csv,md}, curve_distances.csv and the error-against-time
+/// plot of a convergence study's grids (size, summary.json) and curves.
+fn convergence(
+    grids: &[(f64, serde_json::Value)],
+    curves: &[(f64, &[CurveRow])],
+    out: &Path,
+) -> Result<()> {
     let quantity = |pointer: &str| -> Vec<GridResult> {
         grids
             .iter()
@@ -274,11 +272,16 @@ fn convergence(grids: &[(f64, serde_json::Value)], out: &Path) -> Result<()> {
         .iter()
         .filter_map(|(name, p)| post::convergence_study(name, &quantity(p)).ok())
         .collect();
-    post::write_convergence_tables(
-        &studies,
-        &out.join("convergence.csv"),
-        &out.join("convergence.md"),
-    )?;
+    post::convergence_table(&studies).write_csv(&out.join("convergence.csv"))?;
+    let distances = curve_distance_table(curves);
+    distances.write_csv(&out.join("curve_distances.csv"))?;
+    let markdown = format!(
+        "{}\n## Curves\n\nRelative L2 distance of σ_mb along FED from each grid's curve \
+         to the next finer one's, over their common FED range.\n\n{}",
+        post::convergence_markdown(&studies),
+        distances.to_markdown()
+    );
+    crate::store::write_atomic(&out.join("convergence.md"), markdown.as_bytes())?;
     let series: Vec<_> = studies
         .iter()
         .map(post::ErrorTimeSeries::from_study)
@@ -296,39 +299,31 @@ fn convergence(grids: &[(f64, serde_json::Value)], out: &Path) -> Result<()> {
     Ok(())
 }
 
-/// The relative L2 distance of σ_mb along FED from each grid's curve to
-/// the next finer one's (over their common FED range), appended to
-/// convergence.md and written to curve_distances.csv: for a step-size
-/// series, the curve error of a step against half of it.
-fn curve_distances(grids: &mut [(f64, Vec<CurveRow>)], out: &Path) -> Result<()> {
-    grids.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let mut csv = String::from("h_mm,finer_h_mm,relative_l2_along_fed\n");
-    let mut md = String::from(
-        "\n## Curves\n\nRelative L2 distance of σ_mb along FED from each grid's curve \
-         to the next finer one's, over their common FED range.\n\n\
-         | h_mm | finer h_mm | relative L2 along FED |\n| ---: | ---: | ---: |\n",
-    );
-    for pair in grids.windows(2) {
-        let ((fine_h, fine), (h, coarse)) = (&pair[0], &pair[1]);
-        let distance = post::curve_distance(coarse, fine, post::CurveAxis::Fed, None);
-        let (h, fine_h) = (
-            post::significant(h * 1e3, 6),
-            post::significant(fine_h * 1e3, 6),
-        );
-        let (csv_cell, md_cell) = match distance {
-            Ok(d) => (format!("{d:.4e}"), format!("{d:.4e}")),
-            Err(e) => (String::new(), format!("n/a: {e}")),
-        };
-        csv.push_str(&format!("{h},{fine_h},{csv_cell}\n"));
-        md.push_str(&format!("| {h} | {fine_h} | {md_cell} |\n"));
+/// For each grid but the finest: its size, the next finer one's (mm) and
+/// the relative L2 distance of σ_mb along FED from its curve to that
+/// grid's, over their common FED range (empty where the curves have none):
+/// for a step-size series, the curve error of a step against half of it.
+fn curve_distance_table(curves: &[(f64, &[CurveRow])]) -> post::Table {
+    let mut sorted = curves.to_vec();
+    sorted.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let rows = sorted
+        .windows(2)
+        .map(|pair| {
+            let ((fine_h, fine), (h, coarse)) = (pair[0], pair[1]);
+            let distance = post::curve_distance(coarse, fine, post::CurveAxis::Fed, None).ok();
+            vec![
+                post::Cell::Num(h * 1e3),
+                post::Cell::Num(fine_h * 1e3),
+                distance.into(),
+            ]
+        })
+        .collect();
+    post::Table {
+        columns: ["h_mm", "finer_h_mm", "relative_l2_along_fed"]
+            .map(String::from)
+            .to_vec(),
+        rows,
     }
-    crate::store::write_atomic(&out.join("curve_distances.csv"), csv.as_bytes())?;
-    let path = out.join("convergence.md");
-    let mut text = std::fs::read_to_string(&path)
-        .with_context(|| format!("{}: cannot read", path.display()))?;
-    text.push_str(&md);
-    crate::store::write_atomic(&path, text.as_bytes())?;
-    Ok(())
 }
 
 /// A Snakefile whose rules call the same stage subcommands on the same work
@@ -436,7 +431,13 @@ mod tests {
                 (h, serde_json::json!({"curve": curve, "solver": solver}))
             })
             .collect();
-        convergence(&grids, &out).unwrap();
+        let rows: Vec<(f64, Vec<CurveRow>)> = grids
+            .iter()
+            .map(|(h, _)| (*h, proportional_curve(*h)))
+            .collect();
+        let curves: Vec<(f64, &[CurveRow])> =
+            rows.iter().map(|(h, r)| (*h, r.as_slice())).collect();
+        convergence(&grids, &curves, &out).unwrap();
         let csv = std::fs::read_to_string(out.join("convergence.csv")).unwrap();
         for (name, _) in CONVERGENCE_QUANTITIES {
             assert!(
@@ -457,7 +458,20 @@ mod tests {
         assert!((cells[0] - 2.0).abs() < 1e-3, "{first_peak}");
         assert!((cells[1] / 5.7e6 - 1.0).abs() < 1e-3, "{first_peak}");
         assert!(out.join("error_vs_time.png").is_file());
+        // The curve distances go with the tables.
+        assert!(md.contains("## Curves"), "{md}");
+        assert!(out.join("curve_distances.csv").is_file());
         std::fs::remove_dir_all(&out).ok();
+    }
+
+    /// σ_mb proportional to the FED up to 1 mm, with the slope 1e9 (1 + 1000 h).
+    fn proportional_curve(h: f64) -> Vec<CurveRow> {
+        (1..=10)
+            .map(|i| {
+                let fed = 1e-4 * i as f64;
+                CurveRow::new(i, 2.0 * fed, 0.0, fed, 1e9 * (1.0 + 1000.0 * h) * fed, 2)
+            })
+            .collect()
     }
 
     /// Each grid's curve is compared with the next finer one's: σ_mb
@@ -465,40 +479,24 @@ mod tests {
     /// |Δslope| / slope_fine, whatever order the cases came in.
     #[test]
     fn curve_distances_compare_each_grid_with_the_next_finer() {
-        let out = std::env::temp_dir().join(format!("ribbar-curves-{}", std::process::id()));
-        std::fs::create_dir_all(&out).unwrap();
-        std::fs::write(out.join("convergence.md"), "## Grids\n").unwrap();
         let slope = |h: f64| 1e9 * (1.0 + 1000.0 * h);
-        let mut grids: Vec<(f64, Vec<CurveRow>)> = [2e-4, 4e-4, 1e-4]
+        let rows: Vec<(f64, Vec<CurveRow>)> = [2e-4, 4e-4, 1e-4]
             .iter()
-            .map(|&h| {
-                let rows = (1..=10)
-                    .map(|i| {
-                        let fed = 1e-4 * i as f64;
-                        CurveRow::new(i, 2.0 * fed, 0.0, fed, slope(h) * fed, 2)
-                    })
-                    .collect();
-                (h, rows)
-            })
+            .map(|&h| (h, proportional_curve(h)))
             .collect();
-        curve_distances(&mut grids, &out).unwrap();
-        let csv = std::fs::read_to_string(out.join("curve_distances.csv")).unwrap();
-        let rows: Vec<Vec<f64>> = csv
-            .lines()
-            .skip(1)
-            .map(|l| l.split(',').map(|c| c.parse().unwrap()).collect())
-            .collect();
-        assert_eq!(rows.len(), 2, "{csv}");
-        for (row, (h, fine)) in rows.iter().zip([(2e-4, 1e-4), (4e-4, 2e-4)]) {
-            assert!((row[0] - h * 1e3).abs() < 1e-12 && (row[1] - fine * 1e3).abs() < 1e-12);
+        let curves: Vec<(f64, &[CurveRow])> =
+            rows.iter().map(|(h, r)| (*h, r.as_slice())).collect();
+        let table = curve_distance_table(&curves);
+        assert_eq!(table.rows.len(), 2, "{}", table.to_markdown());
+        for (row, (h, fine)) in table.rows.iter().zip([(2e-4, 1e-4), (4e-4, 2e-4)]) {
+            let [post::Cell::Num(row_h), post::Cell::Num(row_fine), post::Cell::Num(d)] =
+                row.as_slice()
+            else {
+                panic!("{row:?}");
+            };
+            assert!((row_h - h * 1e3).abs() < 1e-12 && (row_fine - fine * 1e3).abs() < 1e-12);
             let expected = (slope(h) - slope(fine)) / slope(fine);
-            assert!((row[2] / expected - 1.0).abs() < 1e-3, "{csv}");
+            assert!((d / expected - 1.0).abs() < 1e-3, "{row:?}");
         }
-        let md = std::fs::read_to_string(out.join("convergence.md")).unwrap();
-        assert!(
-            md.starts_with("## Grids") && md.contains("## Curves"),
-            "{md}"
-        );
-        std::fs::remove_dir_all(&out).ok();
     }
 }

@@ -51,6 +51,6 @@ pub use summary::{
     CurveSummary, SummaryOptions, FIRST_PEAK_DROP,
 };
 pub use table::{
-    convergence_order_table, convergence_table, significant, study_table, value_label,
-    write_convergence_tables, write_study_tables, Cell, StudyCase, Table,
+    convergence_markdown, convergence_order_table, convergence_table, parameters_label,
+    study_table, value_label, write_convergence_tables, write_study_tables, Cell, StudyCase, Table,
 };

@@ -83,6 +83,31 @@ impl From<&serde_yaml::Value> for Cell {
     }
 }
 
+/// A case's varied parameters as they read in a legend or a table row:
+/// `key=value, …`, each key by the shortest dotted suffix no other of them
+/// ends with (`mu`, but `interface.ft` and `concrete.ft` when both vary).
+pub fn parameters_label(parameters: &[(String, serde_yaml::Value)]) -> String {
+    let keys: Vec<&str> = parameters.iter().map(|(k, _)| k.as_str()).collect();
+    parameters
+        .iter()
+        .map(|(k, v)| format!("{}={}", short_key(k, &keys), value_label(v)))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// The shortest dotted suffix of `key` that no other of `keys` ends with.
+fn short_key<'k>(key: &'k str, keys: &[&str]) -> &'k str {
+    let starts = key.match_indices('.').map(|(i, _)| i + 1);
+    let mut suffixes = starts.rev().map(|i| &key[i..]);
+    suffixes
+        .find(|suffix| {
+            keys.iter()
+                .filter(|&&other| other != key)
+                .all(|other| !other.ends_with(&format!(".{suffix}")) && *other != *suffix)
+        })
+        .unwrap_or(key)
+}
+
 /// A study parameter's value as it reads in a table cell or a legend: one
 /// line, strings unquoted, mappings (a whole law, say) as `k: v, k: v`.
 pub fn value_label(v: &serde_yaml::Value) -> String {
@@ -146,7 +171,7 @@ fn csv_number(x: f64) -> String {
 
 /// `x` rounded to `digits` significant digits, trailing zeros dropped;
 /// scientific outside [1e-3, 1e6).
-pub fn significant(x: f64, digits: usize) -> String {
+fn significant(x: f64, digits: usize) -> String {
     if x == 0.0 {
         return "0".into();
     }
@@ -414,21 +439,48 @@ pub fn write_convergence_tables(
     csv: &Path,
     md: &Path,
 ) -> Result<(), PostError> {
-    let grids = convergence_table(studies);
-    grids.write_csv(csv)?;
-    let text = format!(
+    convergence_table(studies).write_csv(csv)?;
+    write_atomic(md, convergence_markdown(studies).as_bytes())
+}
+
+/// The Markdown of [`write_convergence_tables`]: the per-grid table and
+/// [`convergence_order_table`], each under its heading.
+pub fn convergence_markdown(studies: &[ConvergenceStudy]) -> String {
+    format!(
         "## Grids\n\nErrors and GCI are relative; the error is against the Richardson \
          extrapolation of the three finest grids.\n\n{}\n## Observed order and \
          extrapolation (Celik et al. 2008, safety factor 1.25)\n\n{}",
-        grids.to_markdown(),
+        convergence_table(studies).to_markdown(),
         convergence_order_table(studies).to_markdown()
-    );
-    write_atomic(md, text.as_bytes())
+    )
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn parameter_labels_are_the_shortest_unique_suffixes() {
+        let keys = [
+            "materials.interface.ft",
+            "materials.concrete.ft",
+            "materials.interface.mu",
+            "mesh.h_interface",
+        ];
+        let labels: Vec<&str> = keys.iter().map(|k| short_key(k, &keys)).collect();
+        assert_eq!(labels, ["interface.ft", "concrete.ft", "mu", "h_interface"]);
+        assert_eq!(short_key("a.b", &["a.b", "b"]), "a.b");
+        let v = |t: &str| serde_yaml::Value::String(t.into());
+        let parameters = [
+            ("materials.interface.ft".to_string(), v("2 MPa")),
+            ("materials.concrete.ft".to_string(), v("3 MPa")),
+            ("materials.interface.mu".to_string(), v("0.3")),
+        ];
+        assert_eq!(
+            parameters_label(&parameters),
+            "interface.ft=2 MPa, concrete.ft=3 MPa, mu=0.3"
+        );
+    }
 
     #[test]
     fn a_whole_law_as_a_parameter_reads_on_one_line() {
