@@ -1082,7 +1082,7 @@ impl<'a> Driver<'a> {
     /// `min_step`), not the length itself read as joules.
     fn max_step(&self, path: &Path, plan: &Plan) -> f64 {
         match plan.mode {
-            ControlMode::Energy => 0.5 * path.load.abs() * self.loading.max_step,
+            ControlMode::Energy => Self::load_work(path, self.loading.max_step),
             _ => self.loading.max_step,
         }
     }
@@ -1375,7 +1375,13 @@ impl<'a> Driver<'a> {
 
     /// The smallest energy step: the work of the load over `min_step`, J.
     fn energy_floor(&self, path: &Path) -> f64 {
-        0.5 * path.load.abs() * self.loading.min_step
+        Self::load_work(path, self.loading.min_step)
+    }
+
+    /// The energy a dissipation-controlled step of `length` of λ stands
+    /// for: ½ |F| × length, J.
+    fn load_work(path: &Path, length: f64) -> f64 {
+        0.5 * path.load.abs() * length
     }
 
     /// Under dissipation control's policy: a dissipative displacement-
