@@ -22,6 +22,9 @@ pub struct Checkpoint {
     pub u_imposed: f64,
     /// Size of the next step to try, m, in the unit `control_mode` says.
     pub next_step: f64,
+    /// The largest next displacement-controlled step the curve's bend
+    /// allows (`loading.curve_tolerance`), m; infinite when it sets none.
+    pub curve_step: f64,
     /// What the steps prescribe at this point of the run.
     pub control_mode: ControlMode,
     /// Global displacement, m.
@@ -82,7 +85,7 @@ pub enum CheckpointError {
     Corrupt { path: String, detail: String },
 }
 
-const CHECKPOINT_MAGIC: u64 = 0x7269_6262_6172_0008;
+const CHECKPOINT_MAGIC: u64 = 0x7269_6262_6172_0009;
 
 impl Checkpoint {
     /// Writes atomically (temporary file then rename), bincode.

@@ -116,6 +116,18 @@ pub enum StepFailure {
         "IMPL-EX extrapolation error {indicator:e} above {limit:e}: the step is redone shorter"
     )]
     ExtrapolationError { indicator: f64, limit: f64 },
+    /// A converged displacement-controlled step left its previous curve
+    /// point further off the chord of its neighbours than the curve
+    /// tolerance allows (`loading.curve_tolerance`).
+    #[error(
+        "the curve bends: its last point lies {deviation:e} off the chord (scaled axes), above {limit:e}; the step is redone shorter"
+    )]
+    CurveResolution {
+        deviation: f64,
+        limit: f64,
+        /// λ increment of the redone step, m.
+        next_step: f64,
+    },
     #[error("no convergence in {iterations} iterations (last relative residual {relative_residual:e}). {regimes}")]
     IterationLimit {
         iterations: usize,

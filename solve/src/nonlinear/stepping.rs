@@ -82,6 +82,23 @@ const SNAP_BACK: f64 = 0.5;
 /// concrete tets in that iterate: a failure spreading through the cube.
 const SPREADING: f64 = 0.01;
 
+/// A displacement-controlled step whose curve bends by more than this
+/// multiple of `loading.curve_tolerance` is redone shorter.
+const CURVE_REJECT: f64 = 2.0;
+/// Steps sized by the curve's bend aim this much below the size that
+/// would meet the tolerance exactly.
+const CURVE_SAFETY: f64 = 0.9;
+
+/// What the review of a converged attempt found.
+#[derive(Default)]
+struct Review {
+    /// The IMPL-EX error indicator (`None` without explicit points).
+    impl_ex_residual: Option<f64>,
+    /// The curve's bend at its last point and the next step it asks for
+    /// (m), see [`Driver::curve_bend`].
+    curve: Option<(f64, f64)>,
+}
+
 /// The converged state of a run between steps.
 #[derive(Clone)]
 struct Path {
@@ -95,6 +112,12 @@ struct Path {
     /// What the next step prescribes, and its size (m).
     mode: ControlMode,
     next_step: f64,
+    /// The largest next displacement-controlled step the curve's bend
+    /// allows (`loading.curve_tolerance`), m; infinite when it sets none.
+    /// Kept apart from `next_step`, which Newton's effort sets, so that a
+    /// step shortened for the curve's sake does not slow the steps after
+    /// the bend.
+    curve_step: f64,
     /// Global displacement increment and Δλ of the last converged step
     /// (the predictor's; empty and 0 before the first).
     last_increment: Vec<f64>,
@@ -344,6 +367,7 @@ impl<'a> Driver<'a> {
             lambda: 0.0,
             mode: ControlMode::Displacement,
             next_step: self.loading.initial_step,
+            curve_step: f64::INFINITY,
             last_increment: Vec::new(),
             last_lambda_increment: 0.0,
             load: 0.0,
@@ -388,6 +412,7 @@ impl<'a> Driver<'a> {
             lambda: cp.u_imposed,
             mode: cp.control_mode,
             next_step: cp.next_step,
+            curve_step: cp.curve_step,
             last_increment,
             last_lambda_increment,
             load: cp.generalised_load,
@@ -463,7 +488,7 @@ impl<'a> Driver<'a> {
                     zone: Some(quantity),
                 })
             }
-            ControlMode::Displacement => self.by_lambda(path, path.next_step),
+            ControlMode::Displacement => self.by_lambda(path, path.next_step.min(path.curve_step)),
             ControlMode::Energy => {
                 let (released, _) = path.last_energies();
                 let size = path.next_step;
@@ -691,7 +716,7 @@ impl<'a> Driver<'a> {
         summary.factorisations = self.ws.lin.factorisations;
         summary.pcg_iterations = self.ws.lin.pcg_iterations;
         summary.krylov_iterations = self.ws.lin.krylov_iterations;
-        let impl_ex_residual = self.review(
+        let review = self.review(
             &mut path,
             &plan,
             (&u_trial, lambda),
@@ -703,7 +728,7 @@ impl<'a> Driver<'a> {
                 path,
                 &plan,
                 (u_trial, lambda),
-                (attempt, impl_ex_residual),
+                (attempt, review),
                 step_wall,
                 observer,
             )?;
@@ -818,11 +843,10 @@ impl<'a> Driver<'a> {
         mut path: Path,
         plan: &Plan,
         (u, lambda): (Vec<f64>, f64),
-        (attempt, impl_ex_residual): (Attempt, Option<f64>),
+        (attempt, review): (Attempt, Review),
         step_wall: WallTimes,
         observer: &mut dyn Observer,
     ) -> Result<Path, SolveError> {
-        let loading = self.loading;
         path.summary.force_only_steps += usize::from(attempt.force_only);
         path.last_increment.clear();
         path.last_increment
@@ -860,46 +884,7 @@ impl<'a> Driver<'a> {
             summary.fed_at_peak = fed;
         }
         summary.final_fed = fed;
-        if plan.mode != path.mode {
-            // A displacement-controlled last step of an indirect run: the
-            // next one (if any) keeps the run's mode and size.
-        } else if attempt.iterations <= loading.easy_iterations {
-            self.rewind = None;
-            path.next_step = (plan.size * loading.growth)
-                .min(self.max_step(&path, plan))
-                .max(path.next_step);
-        } else if attempt.force_only && self.explicit_interface {
-            // Ended on its best iterate (friction points chattering; the
-            // interface's damage is explicit): the chatter, not the step,
-            // sets the residual (R2's floors did not shrink from 20 nm to
-            // 1 nm), so keeping the size would crawl; the next step grows
-            // as after an easy one, and a failure cuts it back. Not for
-            // the implicit interface, whose runs keep their curves
-            // (docs/solver.md, "IMPL-EX interface").
-            path.next_step = (plan.size * loading.growth).min(self.max_step(&path, plan));
-        } else {
-            path.next_step = plan.size;
-        }
-        if self.settings.path_following == PathFollowing::Energy
-            || (self.settings.path_following == PathFollowing::Auto
-                && path.mode == ControlMode::Energy)
-        {
-            self.switch_after(&mut path, plan);
-        }
-        if let Some(e) = impl_ex_residual {
-            let summary = &mut path.summary;
-            summary.impl_ex_max_residual = summary.impl_ex_max_residual.max(e);
-            // A linear extrapolation's error grows like h² on a
-            // smooth history; near R1's adhesion peak it was closer to
-            // h (docs/solver.md), and the steps then shrink over
-            // several steps instead of one.
-            if e > self.settings.impl_ex_tolerance {
-                let shrink = (self.settings.impl_ex_tolerance / e).sqrt() * 0.9;
-                path.next_step = (plan.size * shrink.max(loading.cutback))
-                    .max(loading.min_step)
-                    .min(path.next_step);
-            }
-        }
+        self.size_next(&mut path, plan, &attempt, &review);
         self.finish(&mut path.summary);
         let h = path.next_step;
         let cp = || self.checkpoint(&path, h);
@@ -917,12 +902,70 @@ impl<'a> Driver<'a> {
                 times: step_wall,
                 residual_history: attempt.history,
                 force_only: attempt.force_only,
-                impl_ex_residual,
+                impl_ex_residual: review.impl_ex_residual,
             },
             &view,
         );
         self.ws.trial.clone_from(&path.committed);
         Ok(path)
+    }
+
+    /// The next step's size after a converged one: grown after an easy
+    /// step, kept after a hard one, bounded by the IMPL-EX error and,
+    /// apart, by the curve's bend; and the switch of control mode.
+    fn size_next(&mut self, path: &mut Path, plan: &Plan, attempt: &Attempt, review: &Review) {
+        let loading = self.loading;
+        // A step the curve's bend shortened says nothing of the size
+        // Newton could take: that one stays as it was.
+        let for_curve = plan.mode == ControlMode::Displacement && path.curve_step < path.next_step;
+        if plan.mode != path.mode || for_curve {
+            // A displacement-controlled last step of an indirect run: the
+            // next one (if any) keeps the run's mode and size.
+        } else if attempt.iterations <= loading.easy_iterations {
+            self.rewind = None;
+            path.next_step = (plan.size * loading.growth)
+                .min(self.max_step(path, plan))
+                .max(path.next_step);
+        } else if attempt.force_only && self.explicit_interface {
+            // Ended on its best iterate (friction points chattering; the
+            // interface's damage is explicit): the chatter, not the step,
+            // sets the residual (R2's floors did not shrink from 20 nm to
+            // 1 nm), so keeping the size would crawl; the next step grows
+            // as after an easy one, and a failure cuts it back. Not for
+            // the implicit interface, whose runs keep their curves
+            // (docs/solver.md, "IMPL-EX interface").
+            path.next_step = (plan.size * loading.growth).min(self.max_step(path, plan));
+        } else {
+            path.next_step = plan.size;
+        }
+        if self.settings.path_following == PathFollowing::Energy
+            || (self.settings.path_following == PathFollowing::Auto
+                && path.mode == ControlMode::Energy)
+        {
+            self.switch_after(path, plan);
+        }
+        path.curve_step = f64::INFINITY;
+        if let Some((deviation, next)) = review.curve {
+            let summary = &mut path.summary;
+            summary.curve_max_deviation = summary.curve_max_deviation.max(deviation);
+            if plan.mode == path.mode {
+                path.curve_step = next.max(loading.initial_step);
+            }
+        }
+        if let Some(e) = review.impl_ex_residual {
+            let summary = &mut path.summary;
+            summary.impl_ex_max_residual = summary.impl_ex_max_residual.max(e);
+            // A linear extrapolation's error grows like h² on a
+            // smooth history; near R1's adhesion peak it was closer to
+            // h (docs/solver.md), and the steps then shrink over
+            // several steps instead of one.
+            if e > self.settings.impl_ex_tolerance {
+                let shrink = (self.settings.impl_ex_tolerance / e).sqrt() * 0.9;
+                path.next_step = (plan.size * shrink.max(loading.cutback))
+                    .max(loading.min_step)
+                    .min(path.next_step);
+            }
+        }
     }
 
     /// After a converged attempt at `u`: the averaged history (under a
@@ -1030,9 +1073,9 @@ impl<'a> Driver<'a> {
 
     /// Whether a converged attempt ending at (`u`, `lambda`) is kept: not
     /// when a process-zone step moved λ too far, nor when its IMPL-EX
-    /// error passes the rejection limit (the failure is set in
-    /// `attempt`). Returns that error, evaluated after the implicit
-    /// history.
+    /// error passes the rejection limit, nor when the curve bent too much
+    /// within it (the failure is set in `attempt`). Returns the IMPL-EX
+    /// error, evaluated after the implicit history, and the curve's bend.
     fn review(
         &mut self,
         path: &mut Path,
@@ -1040,18 +1083,96 @@ impl<'a> Driver<'a> {
         (u, lambda): (&[f64], f64),
         attempt: &mut Attempt,
         step_wall: &mut WallTimes,
-    ) -> Result<Option<f64>, SolveError> {
+    ) -> Result<Review, SolveError> {
+        let mut review = Review::default();
         if attempt.failure.is_none() {
             attempt.failure = self.load_jump(path, plan, lambda);
         }
         if attempt.failure.is_some() {
-            return Ok(None);
+            return Ok(review);
         }
-        let e = self.implicit_history(&path.committed, u, step_wall)?;
-        if let Some(e) = e {
+        review.impl_ex_residual = self.implicit_history(&path.committed, u, step_wall)?;
+        if let Some(e) = review.impl_ex_residual {
             attempt.failure = self.rejection(path, plan, e);
         }
-        Ok(e)
+        if attempt.failure.is_none() {
+            review.curve = self.curve_bend(path, plan, u);
+            if let Some((deviation, _)) = review.curve {
+                attempt.failure = self.curve_rejection(path, plan, deviation);
+            }
+        }
+        Ok(review)
+    }
+
+    /// How far the curve bends at its last point once a displacement-
+    /// controlled step ends at `u`: the distance of that point from the
+    /// chord between the one before it (or the origin) and the new one,
+    /// on axes scaled to the FED's range and to the largest |σ_mb| so far
+    /// (`loading.curve_tolerance`), and the step size that would bring it
+    /// to the tolerance. The distance grows with the product of the two
+    /// steps' lengths, whence the geometric mean in the next size. `None`
+    /// when the control is off, under path-following or before the first
+    /// step.
+    fn curve_bend(&self, path: &Path, plan: &Plan, u: &[f64]) -> Option<(f64, f64)> {
+        let loading = self.loading;
+        let tolerance = loading.curve_tolerance;
+        if tolerance <= 0.0
+            || plan.mode != ControlMode::Displacement
+            || path.mode != ControlMode::Displacement
+        {
+            return None;
+        }
+        let rows = &path.rows;
+        let last = rows.last()?;
+        let before = rows.len().checked_sub(2).map(|i| &rows[i]);
+        let (_, fed, bond) = self.problem.measurement.eval(u, &self.ws.f_int);
+        let fed_range = loading.fed_stop.unwrap_or(loading.u_final);
+        let stress_range = rows
+            .iter()
+            .map(|r| r.bond_stress.abs())
+            .fold(bond.abs(), f64::max);
+        if !(stress_range > 0.0 && fed.is_finite()) {
+            return None;
+        }
+        let scaled = |fed: f64, bond: f64| [fed / fed_range, bond / stress_range];
+        let deviation = distance_to_segment(
+            scaled(last.fed, last.bond_stress),
+            before.map_or([0.0, 0.0], |r| scaled(r.fed, r.bond_stress)),
+            scaled(fed, bond),
+        );
+        if !deviation.is_finite() {
+            return None;
+        }
+        let previous = match path.last_lambda_increment {
+            d if d > 0.0 => d,
+            _ => plan.size,
+        };
+        let next = if deviation > 0.0 {
+            CURVE_SAFETY * (previous * plan.size * tolerance / deviation).sqrt()
+        } else {
+            f64::INFINITY
+        };
+        Some((deviation, next))
+    }
+
+    /// The failure that sends a converged step back when the curve's bend
+    /// `deviation` passes `CURVE_REJECT` × `loading.curve_tolerance`, with
+    /// the size of the shorter step (the bend shrinks in proportion to
+    /// it); never for a step at or below `initial_step`.
+    fn curve_rejection(&self, path: &mut Path, plan: &Plan, deviation: f64) -> Option<StepFailure> {
+        let loading = self.loading;
+        let limit = CURVE_REJECT * loading.curve_tolerance;
+        let floor = loading.initial_step;
+        if deviation <= limit || plan.size <= floor * (1.0 + 1e-12) {
+            return None;
+        }
+        path.summary.curve_rejections += 1;
+        let next_step = (CURVE_SAFETY * plan.size * loading.curve_tolerance / deviation).max(floor);
+        Some(StepFailure::CurveResolution {
+            deviation,
+            limit,
+            next_step,
+        })
     }
 
     /// The failure of a converged process-zone step that moved λ to
@@ -1098,19 +1219,23 @@ impl<'a> Driver<'a> {
         observer: &mut dyn Observer,
     ) -> Result<Outcome, SolveError> {
         let loading = self.loading;
+        let converged = matches!(attempt.failure, Some(StepFailure::CurveResolution { .. }));
         if self.rewind.is_none()
+            && !converged
             && self.settings.interface_holds == InterfaceHolds::OnStall
             && path.summary.interface_holds_from_step.is_none()
         {
             self.rewind = Some(path.clone());
         }
         let reason = attempt.failure.expect("a failed attempt");
-        path.summary.cutbacks += 1;
+        if !converged {
+            path.summary.cutbacks += 1;
+        }
         let load_jump = matches!(reason, StepFailure::LoadJump { .. });
-        let next = if load_jump {
-            self.lambda_step(&path)
-        } else {
-            plan.size * loading.cutback
+        let next = match reason {
+            StepFailure::LoadJump { .. } => self.lambda_step(&path),
+            StepFailure::CurveResolution { next_step, .. } => next_step,
+            _ => plan.size * loading.cutback,
         };
         self.ws.trial.clone_from(&path.committed);
         let step = path.rows.len() + 1;
@@ -1126,6 +1251,10 @@ impl<'a> Driver<'a> {
             path.mode = ControlMode::Displacement;
             path.zone_paused = true;
             path.next_step = next;
+            return Ok(Outcome::Continue(path));
+        }
+        if converged {
+            path.curve_step = next;
             return Ok(Outcome::Continue(path));
         }
         let (released, work) = path.last_energies();
@@ -1390,7 +1519,9 @@ impl<'a> Driver<'a> {
     /// hands back (its Δλ sizes the next step).
     fn switch_after(&self, path: &mut Path, plan: &Plan) {
         let (released, work) = path.last_energies();
-        let ratio = path.next_step / plan.size;
+        // The size the next step would have (the curve may bound it)
+        // over this one's.
+        let ratio = path.next_step.min(path.curve_step) / plan.size;
         match plan.mode {
             ControlMode::Displacement
                 if path.mode == ControlMode::Displacement
@@ -1434,6 +1565,7 @@ impl<'a> Driver<'a> {
             n_interfaces: model.interfaces.len(),
             u_imposed: path.lambda,
             next_step,
+            curve_step: path.curve_step,
             control_mode: path.mode,
             u: path.u.clone(),
             states: path.committed.clone(),
@@ -1769,4 +1901,17 @@ fn peak_resident_mib() -> Option<f64> {
     let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
     let kib: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
     Some(kib / 1024.0)
+}
+
+/// Distance of `p` from the segment from `a` to `b` (a point when they
+/// coincide).
+fn distance_to_segment(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
+    let (ab, ap) = ([b[0] - a[0], b[1] - a[1]], [p[0] - a[0], p[1] - a[1]]);
+    let length2 = ab[0] * ab[0] + ab[1] * ab[1];
+    let t = if length2 > 0.0 {
+        ((ap[0] * ab[0] + ap[1] * ab[1]) / length2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    (ap[0] - t * ab[0]).hypot(ap[1] - t * ab[1])
 }

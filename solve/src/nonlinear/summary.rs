@@ -67,6 +67,15 @@ pub struct Summary {
     /// error was above `impl_ex_reject` × `impl_ex_tolerance`.
     #[serde(default)]
     pub impl_ex_rejections: usize,
+    /// Converged steps redone shorter because the curve bent more within
+    /// them than `loading.curve_tolerance` allows.
+    #[serde(default)]
+    pub curve_rejections: usize,
+    /// The largest distance of a kept curve point from the chord of its
+    /// neighbours (scaled axes, see `loading.curve_tolerance`): how finely
+    /// the steps sample the curve's bends; 0 when not checked.
+    #[serde(default)]
+    pub curve_max_deviation: f64,
     /// Tets whose damage is integrated explicitly (IMPL-EX): all under
     /// `concrete_integration: impl_ex`, else the degenerate ones
     /// (`solver.sliver_quality`).

@@ -43,6 +43,7 @@ pub struct RawLoading {
     pub cutback: Option<f64>,
     pub easy_iterations: Option<usize>,
     pub max_steps: Option<usize>,
+    pub curve_tolerance: Option<f64>,
 }
 
 /// Displacement-controlled loading, SI.
@@ -70,7 +71,21 @@ pub struct Loading {
     /// when unset, so that specs without it keep their cache keys.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub max_steps: Option<usize>,
+    /// How closely the steps follow the bond stress–slip curve: after a
+    /// displacement-controlled step, the distance of the previous curve
+    /// point from the chord of its neighbours, on axes scaled to the FED's
+    /// range (`fed_stop`, else `u_final`) and to the largest |σ_mb| so
+    /// far, is held near this (the next step is sized by it, a step more
+    /// than twice above it is redone shorter, never below
+    /// `initial_step`). 0 switches it off; a record written before it
+    /// existed reads as 0.
+    #[serde(default)]
+    pub curve_tolerance: f64,
 }
+
+/// `loading.curve_tolerance` unless a scene sets it (docs/solver.md,
+/// "Resolving the curve").
+pub const DEFAULT_CURVE_TOLERANCE: f64 = 3e-3;
 
 impl Default for Loading {
     fn default() -> Self {
@@ -84,6 +99,7 @@ impl Default for Loading {
             cutback: 0.5,
             easy_iterations: 5,
             max_steps: None,
+            curve_tolerance: DEFAULT_CURVE_TOLERANCE,
         }
     }
 }
@@ -126,6 +142,7 @@ impl RawLoading {
             cutback: self.cutback.unwrap_or(d.cutback),
             easy_iterations: self.easy_iterations.unwrap_or(d.easy_iterations),
             max_steps: self.max_steps,
+            curve_tolerance: self.curve_tolerance.unwrap_or(d.curve_tolerance),
         };
         let bad = |key: &str, value: f64, bound| {
             Err(SolverSpecError::OutOfRange {
@@ -134,6 +151,13 @@ impl RawLoading {
                 bound,
             })
         };
+        if !(l.curve_tolerance >= 0.0 && l.curve_tolerance.is_finite()) {
+            return bad(
+                "loading.curve_tolerance",
+                l.curve_tolerance,
+                "must be ≥ 0 (0: off)",
+            );
+        }
         if l.max_steps == Some(0) {
             return bad("loading.max_steps", 0.0, "must be ≥ 1");
         }
