@@ -132,7 +132,9 @@ fn threshold_two_cycles_are_settled_by_an_explicit_retry() {
     let work = std::env::temp_dir().join(format!("ribbar-cycle-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&work);
     // The whole specimen's mesh has the two-cycle (its half-turn half, the
-    // default, runs through without one).
+    // default, runs through without one), with steps that cross the peak
+    // in a few long strides: the curve control's shorter steps there
+    // (`loading.curve_tolerance`) pass it without one.
     let (out, solve) = run_tiny_ribbed(
         &work,
         &[
@@ -140,6 +142,8 @@ fn threshold_two_cycles_are_settled_by_an_explicit_retry() {
             "solver.stagnation_acceptance=1",
             "--set",
             "specimen.symmetry=full",
+            "--set",
+            "loading.curve_tolerance=0",
         ],
     );
     assert_settled_to_the_end(&out, &solve, "explicit_retries");
@@ -388,13 +392,17 @@ fn brittle_failure_curve(
 
 /// A case outside the stress sweep (case 19 of docs/stress-holdout.md:
 /// a stiff, strong, rough interface on widely spaced ribs, a soft bar):
-/// past its peak dissipation control converges steps down the split
-/// branch, λ back to zero and below it at a few per cent of the peak load,
-/// before it stalls. That is the same brittle failure as a stall right at
-/// the peak: the run ends as a result, whose failure load is the largest
-/// force of the curve, at that step's λ.
+/// the cube splits. Dissipation control, with the interface points held
+/// (tried before a split is diagnosed), converges its smallest step with
+/// λ in place but 181 held points cannot settle while concrete damage
+/// spreads: no state in balance with the interface's history releases
+/// that little energy. The run ends as a result, whose failure load is the
+/// largest force of the curve, at that step's λ. (Diagnosed before the
+/// held points were tried, a stall whose iterates wandered to λ < 0 was
+/// taken for a split on the stress sweep's case 21, which the held points
+/// carry to 0.3 mm: `a_stall_goes_back_and_holds_the_interface_points_that_chatter`.)
 #[test]
-fn a_split_followed_down_its_branch_ends_at_a_brittle_failure_at_the_peak() {
+fn a_split_whose_held_points_do_not_settle_ends_at_a_brittle_failure_at_the_peak() {
     let work = std::env::temp_dir().join(format!("ribbar-split-branch-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&work);
     let sets = [
@@ -415,21 +423,22 @@ fn a_split_followed_down_its_branch_ends_at_a_brittle_failure_at_the_peak() {
     let (out, solve) = run_tiny_ribbed(&work, &args);
     let rows = brittle_failure_curve(&out, &solve, &work);
     let ending = &solve["ending"];
+    assert!(ending["unsettled_points"].as_u64().unwrap() > 0, "{solve}");
+    assert!(solve["summary"]["interface_holds_from_step"]
+        .as_u64()
+        .is_some());
     let peak = rows
         .iter()
         .max_by(|a, b| a.force.total_cmp(&b.force))
         .unwrap();
-    let last = rows.last().unwrap();
-    // Steps were converged beyond the peak, back below half its λ.
-    assert!(last.step > peak.step, "{solve}");
-    assert!(last.u_imposed < 0.5 * peak.u_imposed, "{last:?} {peak:?}");
     assert_eq!(ending["force"].as_f64().unwrap(), peak.force);
     let u_end = ending["u_imposed"].as_f64().unwrap();
     assert!(
         (u_end - peak.u_imposed).abs() <= 1e-12 * peak.u_imposed,
         "{u_end} {peak:?}"
     );
-    assert!(ending["snap_back_to"].as_f64().unwrap() < 0.5 * peak.u_imposed);
+    // Ended short of u_final.
+    assert!(rows.last().unwrap().u_imposed < 0.3e-3, "{solve}");
     std::fs::remove_dir_all(&work).unwrap();
 }
 

@@ -586,16 +586,27 @@ fn report_ending(ctx: &Ctx, ending: &solve::nonlinear::Ending) {
             force,
             u_imposed,
             snap_back_to,
+            unsettled_points,
             damaging_concrete_tets,
             concrete_tets,
         } => {
+            let beyond = if unsettled_points > 0 {
+                format!(
+                    "beyond it no state at dissipation control's smallest step is in balance \
+                     ({unsettled_points} held interface points do not settle)"
+                )
+            } else {
+                format!(
+                    "beyond it the path snaps back to u = {:.4} mm",
+                    snap_back_to * 1e3
+                )
+            };
             ctx.printer.line(&format!(
                 "solve: ended at a brittle failure: F = {force:.1} N at u = {:.4} mm is the \
-                 failure load; beyond it the path snaps back to u = {:.4} mm with concrete \
-                 damage spreading in {damaging_concrete_tets} of {concrete_tets} concrete tets \
-                 (the cube splits: no quasi-static continuation under a growing pull)",
+                 failure load; {beyond} with concrete damage spreading in \
+                 {damaging_concrete_tets} of {concrete_tets} concrete tets (the cube splits: \
+                 no quasi-static continuation under a growing pull)",
                 u_imposed * 1e3,
-                snap_back_to * 1e3
             ));
         }
         solve::nonlinear::Ending::Unloaded {

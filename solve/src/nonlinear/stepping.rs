@@ -1287,11 +1287,15 @@ impl<'a> Driver<'a> {
             if let Some(limit) = self.limit_load(&path, &reason) {
                 return Ok(Outcome::End(limit, path));
             }
-            if let Some(failure) = self.brittle_failure(&path, plan, lambda, &reason) {
-                return Ok(Outcome::End(failure, path));
-            }
+            // The held points first: a stalled attempt's iterates can
+            // wander to λ < 0 with damage everywhere without a split
+            // (the stress sweep's case 21, which the holds carry to its
+            // end), so a split is diagnosed only once they were tried.
             if let Some(back) = self.rewind.take() {
                 return Ok(Outcome::Continue(self.go_back(back, &path, observer)));
+            }
+            if let Some(failure) = self.brittle_failure(&path, plan, lambda, &reason) {
+                return Ok(Outcome::End(failure, path));
             }
             if self.settings.interface_holds == InterfaceHolds::OnStall
                 && path
@@ -1397,6 +1401,15 @@ impl<'a> Driver<'a> {
     /// force, whose force is the failure load, and the stall counts as the
     /// same ending once the attempt's λ is below [`SNAP_BACK`] of that
     /// step's λ.
+    ///
+    /// With interface points held (tried before this diagnosis), the
+    /// attempt at the smallest energy step may instead converge with λ in
+    /// place while the held points cannot settle and concrete damage
+    /// spreads: no state in balance with the interface's own history
+    /// releases that little energy, the same unstable split seen from the
+    /// other side (found on the stress holdout's cases 7 and 19, which
+    /// end at a snap-back when their points are not held). The failure
+    /// load is then the largest force.
     fn brittle_failure(
         &self,
         path: &Path,
@@ -1413,9 +1426,13 @@ impl<'a> Driver<'a> {
             last,
             |a, r| if r.force.abs() > a.force.abs() { r } else { a },
         );
+        let unsettled_points = match reason {
+            StepFailure::Unsettled { points, .. } => *points,
+            _ => 0,
+        };
         let (force, u_imposed) = if lambda < SNAP_BACK * path.lambda {
             (last.force, path.lambda)
-        } else if lambda < SNAP_BACK * peak.u_imposed {
+        } else if lambda < SNAP_BACK * peak.u_imposed || unsettled_points > 0 {
             (peak.force, peak.u_imposed)
         } else {
             return None;
@@ -1424,6 +1441,11 @@ impl<'a> Driver<'a> {
             force,
             u_imposed,
             snap_back_to: lambda,
+            unsettled_points: if lambda < SNAP_BACK * peak.u_imposed {
+                0
+            } else {
+                unsettled_points
+            },
             damaging_concrete_tets: damaging,
             concrete_tets: concrete,
         })

@@ -151,8 +151,16 @@ pub enum Ending {
         /// Imposed displacement of that step, m.
         u_imposed: f64,
         /// The imposed displacement the dissipation-controlled attempt
-        /// fell back to, m.
+        /// fell back to, m (its own λ when the evidence is
+        /// `unsettled_points`).
         snap_back_to: f64,
+        /// Interface points held for the attempt at dissipation control's
+        /// smallest step that did not settle: the split's other evidence,
+        /// where the attempt converged without λ snapping back but no
+        /// state with their laws' history was in balance; 0 when λ
+        /// snapped back.
+        #[serde(default)]
+        unsettled_points: usize,
         /// Concrete tets whose damage grew in that attempt's last iterate,
         /// of all concrete tets.
         damaging_concrete_tets: usize,
