@@ -128,6 +128,8 @@ struct Path {
     last_load_increment: f64,
     /// Whether the steel's plastic strain grew in the last converged step.
     steel_yielding: bool,
+    /// Concrete tets whose damage grew in the last converged step.
+    damaging_tets: usize,
     /// The next step is taken under displacement control after a
     /// process-zone attempt moved λ too far ([`StepFailure::LoadJump`]);
     /// cleared when a step converges.
@@ -373,6 +375,7 @@ impl<'a> Driver<'a> {
             load: 0.0,
             last_load_increment: 0.0,
             steel_yielding: false,
+            damaging_tets: 0,
             zone_paused: false,
         }
     }
@@ -418,6 +421,7 @@ impl<'a> Driver<'a> {
             load: cp.generalised_load,
             last_load_increment: cp.last_load_increment,
             steel_yielding: false,
+            damaging_tets: 0,
             zone_paused: false,
         })
     }
@@ -732,12 +736,10 @@ impl<'a> Driver<'a> {
                 step_wall,
                 observer,
             )?;
-            Ok(
-                match self.yield_plateau(&path).or_else(|| self.lost_load(&path)) {
-                    Some(ending) => Outcome::End(ending, path),
-                    None => Outcome::Continue(path),
-                },
-            )
+            Ok(match self.ending_after_step(&path) {
+                Some(ending) => Outcome::End(ending, path),
+                None => Outcome::Continue(path),
+            })
         } else {
             self.cut_back(path, &plan, lambda, attempt, observer)
         }
@@ -863,8 +865,9 @@ impl<'a> Driver<'a> {
         path.zone_paused = false;
         path.u = u;
         std::mem::swap(&mut path.committed, &mut self.ws.trial);
-        path.steel_yielding =
-            RegimeChanges::between(&self.ws.trial, &path.committed).steel_yield > 0;
+        let changes = RegimeChanges::between(&self.ws.trial, &path.committed);
+        path.steel_yielding = changes.steel_yield > 0;
+        path.damaging_tets = changes.concrete_damage;
         release_retried(&mut path.committed, &self.explicit);
         path.lambda = lambda;
         let (force, fed, bond) = self.problem.measurement.eval(&path.u, &self.ws.f_int);
@@ -1455,7 +1458,12 @@ impl<'a> Driver<'a> {
     /// least [`SPREADING`] of the concrete tets: those tets' count and the
     /// concrete's.
     fn spreading_damage(&self, reason: &StepFailure) -> Option<(usize, usize)> {
-        let regimes = reason.regimes()?;
+        self.spreading(reason.regimes()?.concrete_damage)
+    }
+
+    /// `damaging` and the count of concrete tets when `damaging` is at
+    /// least [`SPREADING`] of them.
+    fn spreading(&self, damaging: usize) -> Option<(usize, usize)> {
         let concrete = self
             .problem
             .model
@@ -1463,8 +1471,47 @@ impl<'a> Driver<'a> {
             .iter()
             .filter(|r| **r == mesh::Region::Concrete)
             .count();
-        (regimes.concrete_damage as f64 >= SPREADING * concrete as f64)
-            .then_some((regimes.concrete_damage, concrete))
+        (damaging as f64 >= SPREADING * concrete as f64).then_some((damaging, concrete))
+    }
+
+    /// How the run ends at its last converged step, if it does there: on
+    /// the yield plateau, unloaded, or down a split's branch.
+    fn ending_after_step(&self, path: &Path) -> Option<Ending> {
+        self.yield_plateau(path)
+            .or_else(|| self.lost_load(path))
+            .or_else(|| self.split_branch(path))
+    }
+
+    /// The end of a run whose dissipation control converged a step down a
+    /// split's branch: λ fell in the step, below [`SNAP_BACK`] of the λ of
+    /// the largest force, with concrete damage growing in at least
+    /// [`SPREADING`] of the tets. The specimen has split at that force
+    /// (the same ending as a stall there, [`Driver::brittle_failure`]); the
+    /// branch beyond, back to λ < 0 and loaded again, is a split cube's,
+    /// not the pull-out's (found on the stress test's tiny smooth bar with
+    /// λ_0 = 1e-6 m, which, followed on, pushed the bar back in and
+    /// reloaded it with its dissipation falling by 2.4 % of W_ext).
+    fn split_branch(&self, path: &Path) -> Option<Ending> {
+        let last = path.rows.last()?;
+        if path.last_lambda_increment >= 0.0 {
+            return None;
+        }
+        let peak = path.rows.iter().fold(
+            last,
+            |a, r| if r.force.abs() > a.force.abs() { r } else { a },
+        );
+        if path.lambda >= SNAP_BACK * peak.u_imposed {
+            return None;
+        }
+        let (damaging, concrete) = self.spreading(path.damaging_tets)?;
+        Some(Ending::BrittleFailure {
+            force: peak.force,
+            u_imposed: peak.u_imposed,
+            snap_back_to: path.lambda,
+            unsettled_points: 0,
+            damaging_concrete_tets: damaging,
+            concrete_tets: concrete,
+        })
     }
 
     /// The end of the run on the loaded member's yield plateau: the last
