@@ -1425,10 +1425,7 @@ impl<'a> Driver<'a> {
         if plan.mode != ControlMode::Energy {
             return None;
         }
-        let peak = path.rows.iter().fold(
-            last,
-            |a, r| if r.force.abs() > a.force.abs() { r } else { a },
-        );
+        let peak = largest_force_row(&path.rows)?;
         let unsettled_points = match reason {
             StepFailure::Unsettled { points, .. } => *points,
             _ => 0,
@@ -1492,14 +1489,10 @@ impl<'a> Driver<'a> {
     /// λ_0 = 1e-6 m, which, followed on, pushed the bar back in and
     /// reloaded it with its dissipation falling by 2.4 % of W_ext).
     fn split_branch(&self, path: &Path) -> Option<Ending> {
-        let last = path.rows.last()?;
         if path.last_lambda_increment >= 0.0 {
             return None;
         }
-        let peak = path.rows.iter().fold(
-            last,
-            |a, r| if r.force.abs() > a.force.abs() { r } else { a },
-        );
+        let peak = largest_force_row(&path.rows)?;
         if path.lambda >= SNAP_BACK * peak.u_imposed {
             return None;
         }
@@ -1537,7 +1530,7 @@ impl<'a> Driver<'a> {
         let [.., last] = path.rows.as_slice() else {
             return None;
         };
-        let peak_force = path.rows.iter().map(|r| r.force.abs()).fold(0.0, f64::max);
+        let peak_force = largest_force_row(&path.rows)?.force.abs();
         if peak_force == 0.0 || last.force.abs() > UNLOADED * peak_force {
             return None;
         }
@@ -1983,4 +1976,14 @@ fn distance_to_segment(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
         0.0
     };
     (ap[0] - t * ab[0]).hypot(ap[1] - t * ab[1])
+}
+
+/// The step of the largest |force| (the latest of equal ones when the last
+/// step is among them, else the earliest), `None` before the first step.
+fn largest_force_row(rows: &[CurveRow]) -> Option<&CurveRow> {
+    let last = rows.last()?;
+    Some(rows.iter().fold(
+        last,
+        |a, r| if r.force.abs() > a.force.abs() { r } else { a },
+    ))
 }
