@@ -456,6 +456,64 @@ fn a_split_whose_held_points_do_not_settle_ends_at_a_brittle_failure_at_the_peak
     std::fs::remove_dir_all(&work).unwrap();
 }
 
+/// A smooth bar with a rough, brittle interface (smooth-holdout case 11:
+/// λ_0 = 1.2 µm, μ = 0.74, ζ = 9.9) near its adhesion peak. After explicit
+/// retries Newton converged to states whose force jumped by 0.13–0.28 MPa
+/// over a fraction of a micrometre while the dissipated energy fell by
+/// 1.1 % of W_ext: solutions of the equilibrium equations that the laws
+/// cannot reach from the last state, on which the run then stalled. Such
+/// states are refused (`solver.dissipation_tolerance`): the run ends as a
+/// result at its peak, and no kept step gives energy back.
+#[test]
+fn a_state_that_creates_energy_is_refused() {
+    let work = std::env::temp_dir().join(format!("ribbar-creates-energy-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&work);
+    let scene = repo().join("tests/data/tiny-smooth.yaml");
+    let sets = [
+        "materials.interface.delta_s=0.139",
+        "materials.interface.mu=0.744",
+        "materials.interface.zeta=9.9",
+        "materials.interface.lambda0=1.22e-6m",
+        "materials.interface.ft=1.21MPa",
+        "materials.interface.Gf=41N/m",
+        "materials.concrete.ft=2.90MPa",
+        "mesh.h_interface=1mm",
+        "specimen.non_adhesive=contact",
+        "specimen.adhesive_length=18mm",
+        "outputs.fields.steps=[]",
+    ];
+    let mut args = vec![
+        "run",
+        scene.to_str().unwrap(),
+        "--work",
+        work.to_str().unwrap(),
+        "-q",
+    ];
+    args.extend(sets.iter().flat_map(|s| ["--set", s]));
+    let out = ribbar(&args);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let solve: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(work.join("tiny-smooth/solve.json")).unwrap(),
+    )
+    .unwrap();
+    assert_eq!(solve["completed"], true, "{solve}");
+    assert!(
+        solve["summary"]["dissipation_rejections"].as_u64().unwrap() > 0,
+        "{solve}"
+    );
+    let check = &solve["energy_check"];
+    assert_eq!(check["passed"], true, "{check}");
+    assert!(
+        check["min_dissipation_increment"].as_f64().unwrap() >= -3e-3,
+        "{check}"
+    );
+    std::fs::remove_dir_all(&work).unwrap();
+}
+
 /// The multigrid-preconditioned Newton–Krylov solve (real gmsh mesh,
 /// interface elements, softening) converges to the same curve as the
 /// Cholesky-preconditioned one, records its choice, and `auto` keeps the

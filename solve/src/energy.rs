@@ -139,6 +139,21 @@ pub struct EnergyTracker<'a> {
     lambda_old: f64,
     force_old: f64,
     rows: Vec<EnergyRow>,
+    /// The state of the last [`EnergyTracker::trial`], kept until it is
+    /// accepted: its stresses and tractions become the next step's old
+    /// ones.
+    trial: Trial,
+}
+
+/// A step evaluated by [`EnergyTracker::trial`] and not yet accepted.
+#[derive(Default)]
+struct Trial {
+    u: Vec<f64>,
+    stress: Vec<[f64; 6]>,
+    traction: Vec<[f64; 3]>,
+    lambda: f64,
+    force: f64,
+    row: Option<EnergyRow>,
 }
 
 impl<'a> EnergyTracker<'a> {
@@ -190,11 +205,12 @@ impl<'a> EnergyTracker<'a> {
             lambda_old: lambda,
             force_old: force,
             rows,
+            trial: Trial::default(),
         };
         tracker.check_sizes(u, states)?;
         // The old stresses of the next step: the converged state's own.
-        let u_copy = u.to_vec();
-        tracker.sweep(&u_copy, states)?;
+        tracker.sweep(u, states)?;
+        tracker.take_trial_stresses();
         Ok(tracker)
     }
 
@@ -206,9 +222,16 @@ impl<'a> EnergyTracker<'a> {
         self.lambda_old = start.lambda;
         self.force_old = start.force;
         self.rows = start.rows;
-        let u_copy = start.u.to_vec();
-        self.sweep(&u_copy, start.states)?;
+        self.sweep(start.u, start.states)?;
+        self.take_trial_stresses();
         Ok(())
+    }
+
+    /// Makes the last sweep's stresses and tractions the old ones.
+    fn take_trial_stresses(&mut self) {
+        std::mem::swap(&mut self.stress_old, &mut self.trial.stress);
+        std::mem::swap(&mut self.traction_old, &mut self.trial.traction);
+        self.trial.row = None;
     }
 
     fn check_sizes(&self, u: &[f64], states: &States) -> Result<(), EnergyError> {
@@ -240,17 +263,22 @@ impl<'a> EnergyTracker<'a> {
 
     /// Evaluates every point at (`u`, `states`): returns (Σ trapezoid work
     /// from the stored old values, Σ stored energy), both on the model, and
-    /// replaces the old stresses and tractions by the new ones.
+    /// keeps the new stresses and tractions in the trial.
     fn sweep(&mut self, u: &[f64], states: &States) -> Result<(f64, f64), EnergyError> {
         let (model, laws, u_old) = (self.model, self.laws, &self.u_old);
         let tets = &self.tets;
+        let trial = &mut self.trial;
+        trial.stress.resize(self.stress_old.len(), [0.0; 6]);
+        trial.traction.resize(self.traction_old.len(), [0.0; 3]);
         let bulk: Vec<Result<(f64, f64), EnergyError>> =
-            self.stress_old
+            trial
+                .stress
                 .par_chunks_mut(CHUNK)
+                .zip(self.stress_old.par_chunks(CHUNK))
                 .enumerate()
-                .map(|(c, chunk)| {
+                .map(|(c, (chunk, olds))| {
                     let (mut work, mut stored) = (0.0, 0.0);
-                    for (k, old) in chunk.iter_mut().enumerate() {
+                    for (k, (new, old)) in chunk.iter_mut().zip(olds).enumerate() {
                         let i = c * CHUNK + k;
                         let nodes = model.tets[i];
                         let gather = |v: &[f64]| -> [f64; 12] {
@@ -268,19 +296,24 @@ impl<'a> EnergyTracker<'a> {
                         let v = tets[i].volume;
                         work += 0.5 * (s_old + sigma).dot(&(eps - eps_old)) * v;
                         stored += psi * v;
-                        old.copy_from_slice(sigma.as_slice());
+                        new.copy_from_slice(sigma.as_slice());
                     }
                     Ok((work, stored))
                 })
                 .collect();
         let kernels = &self.kernels;
-        let iface: Vec<Result<(f64, f64), EnergyError>> = self
-            .traction_old
+        let iface: Vec<Result<(f64, f64), EnergyError>> = trial
+            .traction
             .par_chunks_mut(CHUNK * INTERFACE_POINTS)
+            .zip(self.traction_old.par_chunks(CHUNK * INTERFACE_POINTS))
             .enumerate()
-            .map(|(c, chunk)| {
+            .map(|(c, (chunk, old_chunk))| {
                 let (mut work, mut stored) = (0.0, 0.0);
-                for (k, olds) in chunk.chunks_mut(INTERFACE_POINTS).enumerate() {
+                for (k, (news, olds)) in chunk
+                    .chunks_mut(INTERFACE_POINTS)
+                    .zip(old_chunk.chunks(INTERFACE_POINTS))
+                    .enumerate()
+                {
                     let i = c * CHUNK + k;
                     let Some(law) = laws.interfaces[i].as_ref() else {
                         continue;
@@ -295,14 +328,14 @@ impl<'a> EnergyTracker<'a> {
                             source: e.source,
                         })?;
                     let ue_old = kern.gather(u_old);
-                    for (p, (old, r)) in olds.iter_mut().zip(&points).enumerate() {
+                    for (p, ((new, old), r)) in news.iter_mut().zip(olds).zip(&points).enumerate() {
                         let (jump, t) = (r.jump, r.law.traction);
                         let jump_old = kern.local_jump(&ue_old, p);
                         let psi = law.stored_energy(&states[p], &jump, &t);
                         let t_old = Vector3::from_column_slice(old);
                         work += 0.5 * (t_old + t).dot(&(jump - jump_old)) * kern.weight;
                         stored += psi * kern.weight;
-                        old.copy_from_slice(t.as_slice());
+                        new.copy_from_slice(t.as_slice());
                     }
                 }
                 Ok((work, stored))
@@ -327,9 +360,24 @@ impl<'a> EnergyTracker<'a> {
         u: &[f64],
         states: &States,
     ) -> Result<EnergyRow, EnergyError> {
+        let row = self.trial(lambda, force, u, states)?;
+        self.accept();
+        Ok(row)
+    }
+
+    /// The energies the step to (`lambda`, `force`, `u`, `states`) would
+    /// add, without adding it: [`EnergyTracker::accept`] does, and another
+    /// trial replaces it (a step the solver rejects).
+    pub fn trial(
+        &mut self,
+        lambda: f64,
+        force: f64,
+        u: &[f64],
+        states: &States,
+    ) -> Result<EnergyRow, EnergyError> {
         self.check_sizes(u, states)?;
+        self.trial.row = None;
         let (work, stored) = self.sweep(u, states)?;
-        self.u_old.copy_from_slice(u);
         let last = self.rows.last().copied().unwrap_or_default();
         let w_ext = last.w_ext + 0.5 * (self.force_old + force) * (lambda - self.lambda_old);
         let w_int = last.w_int + self.force_factor * work;
@@ -340,10 +388,22 @@ impl<'a> EnergyTracker<'a> {
             stored,
             dissipated: w_int - stored,
         };
-        self.lambda_old = lambda;
-        self.force_old = force;
-        self.rows.push(row);
+        let trial = &mut self.trial;
+        trial.u.clear();
+        trial.u.extend_from_slice(u);
+        (trial.lambda, trial.force, trial.row) = (lambda, force, Some(row));
         Ok(row)
+    }
+
+    /// Adds the last trial's step; without one, does nothing.
+    pub fn accept(&mut self) {
+        let Some(row) = self.trial.row else {
+            return;
+        };
+        std::mem::swap(&mut self.u_old, &mut self.trial.u);
+        (self.lambda_old, self.force_old) = (self.trial.lambda, self.trial.force);
+        self.take_trial_stresses();
+        self.rows.push(row);
     }
 
     /// The rows of every step so far.
@@ -658,8 +718,9 @@ mod tests {
     }
 
     /// A tracker sent back to an earlier converged state (a run that
-    /// discards steps after a stall) continues as one that never left it:
-    /// the detour leaves nothing in its sums.
+    /// discards steps after a stall) continues as one that never left it,
+    /// and so does one that evaluates states it then refuses: neither the
+    /// detour nor the refused trials leave anything in its sums.
     #[test]
     fn energy_tracker_rewound_equals_resumed() {
         let mut model = Model {
@@ -737,6 +798,12 @@ mod tests {
             })
             .unwrap();
         for k in 101..=400 {
+            if k % 7 == 0 {
+                // A state the solver refuses: evaluated, never accepted.
+                let (u, next, f) = at(1.5 * path(k), &states);
+                let refused = sent_back.trial(1.5 * path(k), f, &u, &next).unwrap();
+                assert_ne!(refused, *straight.rows().last().unwrap());
+            }
             let (u, next, f) = at(path(k), &states);
             straight.step(path(k), f, &u, &next).unwrap();
             sent_back.step(path(k), f, &u, &next).unwrap();

@@ -3,13 +3,14 @@
 //! there is one), and writes `curve.csv`, `solve.json`, the requested VTU
 //! fields and the interface traction profiles along the bar.
 //!
-//! The energy balance of every converged step (`solve::energy`) is tracked
-//! alongside: `curve.csv` carries the energy columns (J, whole specimen;
+//! The solver tracks the energy balance of every converged step
+//! (`solve::energy`; it refuses states that create energy): `curve.csv`
+//! carries the energy columns (J, whole specimen;
 //! `solve::curve::ENERGY_COLUMNS`) after the curve's, and `solve.json` an
 //! `energy_check` object. Everything a resumed run needs (the solver's
-//! state, the energy rows, the interface profiles so far) is in the one
-//! checkpoint file (`Checkpoint::record`), so a resumed run continues the
-//! sums and writes the same values as an uninterrupted one.
+//! state with the energy rows, and in `Checkpoint::record` the interface
+//! profiles so far) is in the one checkpoint file, so a resumed run
+//! continues the sums and writes the same values as an uninterrupted one.
 
 use super::ctx::Ctx;
 use super::kinds::{Stage, CHECKPOINT_FILE};
@@ -17,7 +18,7 @@ use anyhow::Result;
 use mesh::Model;
 use solve::assembly::{ElementLaws, States};
 use solve::curve::CurveRow;
-use solve::energy::{EnergyRow, EnergyStart, EnergyTracker, ENERGY_TOLERANCE};
+use solve::energy::ENERGY_TOLERANCE;
 use solve::fields::ProfileRow;
 use solve::nonlinear::{
     Checkpoint, CommittedView, Cutback, Observer, ObserverRecord, RunResult, SolveError, StepReport,
@@ -57,8 +58,6 @@ struct StageObserver<'a> {
     pending_peak: Option<PeakState>,
     error: Option<anyhow::Error>,
     cutbacks: Vec<String>,
-    /// The energy balance; `Err` says why it is not available.
-    energy: std::result::Result<EnergyTracker<'a>, String>,
 }
 
 /// A converged state kept for the peak fields.
@@ -114,10 +113,6 @@ impl StageObserver<'_> {
         let started = Instant::now();
         let mut checkpoint = checkpoint();
         checkpoint.record = ObserverRecord {
-            energy: self
-                .energy
-                .as_ref()
-                .map_or_else(|_| Vec::new(), |t| t.rows().to_vec()),
             profile: self.profile.clone(),
             peak_profile: self.peak_profile.clone(),
         };
@@ -166,11 +161,6 @@ impl Observer for StageObserver<'_> {
             t.factorisation,
             t.solve
         ));
-        if let Ok(tracker) = &mut self.energy {
-            if let Err(e) = tracker.step(r.u_imposed, r.force, view.u, view.states) {
-                self.energy = Err(format!("step {}: {e}", r.step));
-            }
-        }
         if self.error.is_some() {
             return;
         }
@@ -219,20 +209,6 @@ impl Observer for StageObserver<'_> {
                 checkpoint.u_imposed * 1e3
             )
         });
-        if let Ok(tracker) = &mut self.energy {
-            let mut rows = tracker.rows().to_vec();
-            rows.truncate(kept.len());
-            let start = EnergyStart {
-                u: view.u,
-                states: view.states,
-                rows,
-                lambda: checkpoint.u_imposed,
-                force: kept.last().map_or(0.0, |r| r.force),
-            };
-            if let Err(e) = tracker.rewind(start) {
-                self.energy = Err(format!("going back to step {}: {e}", kept.len()));
-            }
-        }
         let discarded = |step: usize| step > kept.len();
         self.profile.retain(|r| !discarded(r.step));
         // Fields of discarded steps: rewritten if the run reaches those
@@ -315,10 +291,6 @@ pub fn run(ctx: &Ctx, out: &Path) -> Result<()> {
     let checkpoint_path = out.join(CHECKPOINT_FILE);
     let checkpoint = load_checkpoint(ctx, &checkpoint_path);
     let (peak_so_far, peak_passed) = peak_before(checkpoint.as_ref())?;
-    let energy = match &checkpoint {
-        None => EnergyTracker::new(&model, &laws).map_err(|e| e.to_string()),
-        Some(cp) => resume_energy(&model, &laws, cp),
-    };
     let record = checkpoint
         .as_ref()
         .map(|cp| cp.record.clone())
@@ -339,7 +311,6 @@ pub fn run(ctx: &Ctx, out: &Path) -> Result<()> {
         pending_peak: None,
         error: None,
         cutbacks: Vec::new(),
-        energy,
     };
     let outcome = solve::problems::pullout::solve_pullout(
         &model,
@@ -366,11 +337,11 @@ pub fn run(ctx: &Ctx, out: &Path) -> Result<()> {
         &out.join("interface_profile.csv"),
         solve::fields::write_profile_csv(&profile).as_bytes(),
     )?;
-    let energy_rows = observer.energy.as_ref().ok().map(|t| t.rows().to_vec());
-    let energy_check = energy_check_json(ctx, &observer.energy, energy_rows.as_deref(), &result)?;
+    let energy_rows = result.energy.as_deref().ok();
+    let energy_check = energy_check_json(ctx, &result)?;
     crate::store::write_atomic(
         &out.join("curve.csv"),
-        solve::curve::write_curve_csv(&result.rows, energy_rows.as_deref()).as_bytes(),
+        solve::curve::write_curve_csv(&result.rows, energy_rows).as_bytes(),
     )?;
     report_ending(ctx, &result.ending);
     let solve_json = serde_json::json!({
@@ -541,14 +512,9 @@ fn write_collection(fields_dir: &Path, rows: &[solve::curve::CurveRow], peak: f6
 
 /// `solve.json`'s `energy_check`: the balance check of the tracked rows,
 /// or why there is none.
-fn energy_check_json(
-    ctx: &Ctx,
-    energy: &std::result::Result<EnergyTracker<'_>, String>,
-    energy_rows: Option<&[EnergyRow]>,
-    result: &RunResult,
-) -> Result<serde_json::Value> {
-    Ok(match (energy, energy_rows) {
-        (Ok(_), Some(rows)) if rows.len() == result.rows.len() => {
+fn energy_check_json(ctx: &Ctx, result: &RunResult) -> Result<serde_json::Value> {
+    Ok(match &result.energy {
+        Ok(rows) if rows.len() == result.rows.len() => {
             let check = solve::energy::check(rows, ENERGY_TOLERANCE);
             if !check.passed {
                 ctx.printer.line(&format!(
@@ -561,7 +527,7 @@ fn energy_check_json(
             v["final"] = serde_json::to_value(rows.last())?;
             v
         }
-        (Err(why), _) => serde_json::json!({"available": false, "reason": why}),
+        Err(why) => serde_json::json!({"available": false, "reason": why}),
         _ => {
             serde_json::json!({"available": false, "reason": "energy rows do not match the curve"})
         }
@@ -621,30 +587,4 @@ fn report_ending(ctx: &Ctx, ending: &solve::nonlinear::Ending) {
             ));
         }
     }
-}
-
-/// The energy tracker of a resumed run, continued from the checkpoint's
-/// state and its record of the steps before it.
-fn resume_energy<'a>(
-    model: &'a Model,
-    laws: &'a ElementLaws,
-    cp: &Checkpoint,
-) -> std::result::Result<EnergyTracker<'a>, String> {
-    let rows = cp.record.energy.clone();
-    if rows.len() != cp.rows.len() {
-        return Err(format!(
-            "the checkpoint's energy record holds {} steps, its curve {}",
-            rows.len(),
-            cp.rows.len()
-        ));
-    }
-    let force = cp.rows.last().map_or(0.0, |r| r.force);
-    let start = EnergyStart {
-        u: &cp.u,
-        states: &cp.states,
-        rows,
-        lambda: cp.u_imposed,
-        force,
-    };
-    EnergyTracker::resume(model, laws, start).map_err(|e| e.to_string())
 }

@@ -46,6 +46,9 @@ pub struct Checkpoint {
     /// N, and its increment in that step (dissipation control).
     pub generalised_load: f64,
     pub last_load_increment: f64,
+    /// Energy balance, one row per converged step (empty when it could not
+    /// be evaluated, see `RunResult::energy`).
+    pub energy: Vec<EnergyRow>,
     /// What the run's caller recorded up to this step; it travels with the
     /// state so that a resumed run continues it (the solver leaves it
     /// empty, the caller fills it before saving).
@@ -55,8 +58,6 @@ pub struct Checkpoint {
 /// What an [`Observer`](super::Observer) recorded of a run up to a checkpoint.
 #[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
 pub struct ObserverRecord {
-    /// Energy balance, one row per converged step.
-    pub energy: Vec<EnergyRow>,
     /// Interface traction profiles of the field steps so far.
     pub profile: Vec<ProfileRow>,
     /// The profile of the current adhesion peak (replaced by each new one).
@@ -85,7 +86,7 @@ pub enum CheckpointError {
     Corrupt { path: String, detail: String },
 }
 
-const CHECKPOINT_MAGIC: u64 = 0x7269_6262_6172_0009;
+const CHECKPOINT_MAGIC: u64 = 0x7269_6262_6172_000a;
 
 impl Checkpoint {
     /// Writes atomically (temporary file then rename), bincode.

@@ -128,6 +128,19 @@ pub enum StepFailure {
         /// λ increment of the redone step, m.
         next_step: f64,
     },
+    /// A converged step whose dissipated energy fell by more than
+    /// `solver.dissipation_tolerance` × W_ext: the laws cannot reach its
+    /// state from the last one (each of them only dissipates, but for the
+    /// FCZM's small non-potential exchange), so Newton found another
+    /// solution of the equilibrium equations than the path's, typically a
+    /// force jump after explicit retries or holds.
+    #[error("the converged state gives back {drop:e} of W_ext from the dissipated energy, more than solver.dissipation_tolerance {limit:e}: it is not on the path of the laws. {regimes}")]
+    CreatesEnergy {
+        /// −ΔW_diss / W_ext.
+        drop: f64,
+        limit: f64,
+        regimes: RegimeChanges,
+    },
     #[error("no convergence in {iterations} iterations (last relative residual {relative_residual:e}). {regimes}")]
     IterationLimit {
         iterations: usize,
@@ -144,6 +157,7 @@ impl StepFailure {
             | StepFailure::Diverging { regimes, .. }
             | StepFailure::LinearSolve { regimes, .. }
             | StepFailure::Unsettled { regimes, .. }
+            | StepFailure::CreatesEnergy { regimes, .. }
             | StepFailure::IterationLimit { regimes, .. } => Some(regimes),
             _ => None,
         }

@@ -19,6 +19,9 @@ pub struct RunResult {
     pub last: Checkpoint,
     /// How the run ended.
     pub ending: Ending,
+    /// The energy balance of every converged step (`crate::energy`), or
+    /// why it could not be evaluated.
+    pub energy: Result<Vec<crate::energy::EnergyRow>, String>,
 }
 
 /// Per converged step, for progress output.

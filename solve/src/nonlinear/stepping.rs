@@ -20,6 +20,7 @@ use crate::assembly::{
     AssemblyError, ElementLaws, KeptBulkMatrix, LoadDerivatives, Outputs, States, System, Tangents,
 };
 use crate::elements::interface::INTERFACE_POINTS;
+use crate::energy::{EnergyRow, EnergyStart, EnergyTracker};
 use crate::laws::mazars::Mazars;
 use crate::laws::{AnyBulkLaw, BulkLaw, HeldHistory, InterfaceLaw, TangentKind};
 use crate::linalg::norm;
@@ -97,6 +98,9 @@ struct Review {
     /// The curve's bend at its last point and the next step it asks for
     /// (m), see [`Driver::curve_bend`].
     curve: Option<(f64, f64)>,
+    /// The regime changes from the committed state to the accepted one,
+    /// counted before the retried points are released.
+    changes: RegimeChanges,
 }
 
 /// The converged state of a run between steps.
@@ -192,6 +196,10 @@ struct Driver<'a> {
     /// path before the first cut-back since the last easy step, which a
     /// stall goes back to.
     rewind: Option<Path>,
+    /// The energy balance of the converged steps, which also refuses a
+    /// state that creates energy (`solver.dissipation_tolerance`); `Err`
+    /// says why it is not available.
+    energy: Result<EnergyTracker<'a>, String>,
     /// Wall times of this invocation, and of the run before a resume.
     wall: WallTimes,
     previous_wall: WallTimes,
@@ -236,7 +244,11 @@ pub fn run(
     let mut driver = Driver::new(*problem, loading, settings, &system, started)?;
     let mut path = match checkpoint {
         Some(cp) => driver.resume(cp)?,
-        None => driver.start(),
+        None => {
+            let path = driver.start();
+            driver.energy = EnergyTracker::new(model, laws).map_err(|e| e.to_string());
+            path
+        }
     };
     driver.previous_wall = path.summary.wall_time_s;
     path.summary.wall_time_s = WallTimes::default();
@@ -348,6 +360,7 @@ impl<'a> Driver<'a> {
             indicator_trial: None,
             averaging,
             rewind: None,
+            energy: Err("not started".into()),
             wall,
             previous_wall: WallTimes::default(),
             started,
@@ -407,6 +420,26 @@ impl<'a> Driver<'a> {
         lin.factorisations = cp.summary.factorisations;
         lin.pcg_iterations = cp.summary.pcg_iterations;
         lin.krylov_iterations = cp.summary.krylov_iterations;
+        self.energy = if cp.energy.len() == cp.rows.len() {
+            EnergyTracker::resume(
+                self.problem.model,
+                self.problem.laws,
+                EnergyStart {
+                    u: &cp.u,
+                    states: &cp.states,
+                    rows: cp.energy,
+                    lambda: cp.u_imposed,
+                    force: cp.rows.last().map_or(0.0, |r| r.force),
+                },
+            )
+            .map_err(|e| e.to_string())
+        } else {
+            Err(format!(
+                "the checkpoint's energy record holds {} steps, its curve {}",
+                cp.energy.len(),
+                cp.rows.len()
+            ))
+        };
         Ok(Path {
             u: cp.u,
             committed: cp.states,
@@ -865,10 +898,11 @@ impl<'a> Driver<'a> {
         path.zone_paused = false;
         path.u = u;
         std::mem::swap(&mut path.committed, &mut self.ws.trial);
-        let changes = RegimeChanges::between(&self.ws.trial, &path.committed);
-        path.steel_yielding = changes.steel_yield > 0;
-        path.damaging_tets = changes.concrete_damage;
-        release_retried(&mut path.committed, &self.explicit);
+        path.steel_yielding = review.changes.steel_yield > 0;
+        path.damaging_tets = review.changes.concrete_damage;
+        if let Ok(tracker) = &mut self.energy {
+            tracker.accept();
+        }
         path.lambda = lambda;
         let (force, fed, bond) = self.problem.measurement.eval(&path.u, &self.ws.f_int);
         let row = CurveRow {
@@ -1104,7 +1138,55 @@ impl<'a> Driver<'a> {
                 attempt.failure = self.curve_rejection(path, plan, deviation);
             }
         }
+        if attempt.failure.is_none() {
+            review.changes = RegimeChanges::between(&path.committed, &self.ws.trial);
+            release_retried(&mut self.ws.trial, &self.explicit);
+            attempt.failure = self.energy_rejection(path, (u, lambda), review.changes);
+        }
         Ok(review)
+    }
+
+    /// The energies of the state the step reached at (`u`, `lambda`) (the
+    /// workspace's trial, its retried points released), and the failure
+    /// that refuses it when its dissipated energy falls by more than
+    /// `solver.dissipation_tolerance` × W_ext. The state is the tracker's
+    /// trial until the commit accepts it.
+    fn energy_rejection(
+        &mut self,
+        path: &mut Path,
+        (u, lambda): (&[f64], f64),
+        regimes: RegimeChanges,
+    ) -> Option<StepFailure> {
+        // Points integrated explicitly for the whole run take their stress
+        // from an extrapolated history and their state from the implicit
+        // one: their energy record carries IMPL-EX's error (bounded by
+        // `impl_ex_tolerance`), not a sign of a state off the path.
+        let explicit = self.explicit_interface || self.explicit.iter().any(|&e| e);
+        let limit = if explicit {
+            0.0
+        } else {
+            self.settings.dissipation_tolerance
+        };
+        let tracker = self.energy.as_mut().ok()?;
+        let (force, _, _) = self.problem.measurement.eval(u, &self.ws.f_int);
+        let row = match tracker.trial(lambda, force, u, &self.ws.trial) {
+            Ok(row) => row,
+            Err(e) => {
+                self.energy = Err(format!("step {}: {e}", path.rows.len() + 1));
+                return None;
+            }
+        };
+        let before = tracker.rows().last().map_or(0.0, |r| r.dissipated);
+        let drop = (before - row.dissipated) / row.w_ext;
+        if limit == 0.0 || !(row.w_ext > 0.0 && drop > limit) {
+            return None;
+        }
+        path.summary.dissipation_rejections += 1;
+        Some(StepFailure::CreatesEnergy {
+            drop,
+            limit,
+            regimes,
+        })
     }
 
     /// How far the curve bends at its last point once a displacement-
@@ -1348,7 +1430,22 @@ impl<'a> Driver<'a> {
         then.damage_passes = now.damage_passes;
         then.held_interface_points = now.held_interface_points;
         then.interface_holds_from_step = Some(back.rows.len() + 1);
+        then.dissipation_rejections = now.dissipation_rejections;
         self.ws.trial.clone_from(&back.committed);
+        if let Ok(tracker) = &mut self.energy {
+            let mut rows = tracker.rows().to_vec();
+            rows.truncate(back.rows.len());
+            let start = EnergyStart {
+                u: &back.u,
+                states: &back.committed,
+                rows,
+                lambda: back.lambda,
+                force: back.rows.last().map_or(0.0, |r| r.force),
+            };
+            if let Err(e) = tracker.rewind(start) {
+                self.energy = Err(format!("going back to step {}: {e}", back.rows.len()));
+            }
+        }
         let h = back.next_step;
         let cp = || self.checkpoint(&back, h);
         observer.rewound(
@@ -1643,6 +1740,7 @@ impl<'a> Driver<'a> {
             last_step: path.last_lambda_increment,
             generalised_load: path.load,
             last_load_increment: path.last_load_increment,
+            energy: self.energy_rows().unwrap_or_default(),
             record: Default::default(),
         }
     }
@@ -1656,7 +1754,16 @@ impl<'a> Driver<'a> {
             summary: path.summary,
             last,
             ending: Ending::Completed,
+            energy: self.energy_rows(),
         })
+    }
+
+    /// The energy rows of the converged steps, or why there are none.
+    fn energy_rows(&self) -> Result<Vec<EnergyRow>, String> {
+        self.energy
+            .as_ref()
+            .map(|t| t.rows().to_vec())
+            .map_err(Clone::clone)
     }
 }
 

@@ -229,6 +229,7 @@ pub struct RawSolver {
     pub sliver_quality: Option<f64>,
     pub interface_holds: Option<InterfaceHolds>,
     pub preconditioner: Option<PreconditionerKind>,
+    pub dissipation_tolerance: Option<f64>,
 }
 
 /// What preconditions GMRES in the Newton–Krylov solver.
@@ -497,6 +498,24 @@ pub struct SolverSettings {
     /// the serialised form at its default.
     #[serde(default, skip_serializing_if = "is_auto_preconditioner")]
     pub preconditioner: PreconditionerKind,
+    /// A converged step whose dissipated energy (W_int − stored, over the
+    /// whole specimen) falls by more than this fraction of W_ext is not a
+    /// state the laws can reach from the last one: it is refused like a
+    /// failed attempt (docs/solver.md, "Steps that create energy"). 0
+    /// disables. Always serialised, so that a change of it (or of its
+    /// default) re-runs the solve.
+    #[serde(default = "default_dissipation_tolerance")]
+    pub dissipation_tolerance: f64,
+}
+
+/// Default of `solver.dissipation_tolerance`: above the FCZM's own
+/// non-potential exchange and the trapezoid's error on the sweeps' steps
+/// (at most 1.7e-3 of W_ext), below the dissipation drops of the force
+/// jumps it refuses (3.99e-3 to 2.4e-2; docs/solver.md).
+pub const DEFAULT_DISSIPATION_TOLERANCE: f64 = 3e-3;
+
+fn default_dissipation_tolerance() -> f64 {
+    DEFAULT_DISSIPATION_TOLERANCE
 }
 
 fn is_on_stall(h: &InterfaceHolds) -> bool {
@@ -602,6 +621,7 @@ impl Default for SolverSettings {
             sliver_quality: 0.0,
             interface_holds: InterfaceHolds::OnStall,
             preconditioner: PreconditionerKind::Auto,
+            dissipation_tolerance: DEFAULT_DISSIPATION_TOLERANCE,
         }
     }
 }
@@ -711,22 +731,31 @@ impl RawSolver {
                 self.sliver_quality.unwrap_or(d.sliver_quality),
             )?,
             interface_holds: self.interface_holds.unwrap_or(d.interface_holds),
-            preconditioner: {
-                let p = self.preconditioner.unwrap_or(d.preconditioner);
-                let linear = self.linear_solver.unwrap_or(d.linear_solver);
-                if p == PreconditionerKind::Multigrid && linear != LinearSolverKind::Gmres {
-                    return Err(SolverSpecError::Combination {
-                        key: "solver.preconditioner".into(),
-                        problem: "multigrid preconditions GMRES only: set linear_solver: gmres (the default) or leave preconditioner out",
-                    });
-                }
-                p
-            },
+            preconditioner: self.preconditioner(&d)?,
+            dissipation_tolerance: in_unit_interval(
+                "solver.dissipation_tolerance",
+                self.dissipation_tolerance
+                    .unwrap_or(d.dissipation_tolerance),
+            )?,
         })
     }
 }
 
 impl RawSolver {
+    /// `preconditioner` as given, else its default; the multigrid only
+    /// with GMRES.
+    fn preconditioner(&self, d: &SolverSettings) -> Result<PreconditionerKind, SolverSpecError> {
+        let p = self.preconditioner.unwrap_or(d.preconditioner);
+        let linear = self.linear_solver.unwrap_or(d.linear_solver);
+        if p == PreconditionerKind::Multigrid && linear != LinearSolverKind::Gmres {
+            return Err(SolverSpecError::Combination {
+                key: "solver.preconditioner".into(),
+                problem: "multigrid preconditions GMRES only: set linear_solver: gmres (the default) or leave preconditioner out",
+            });
+        }
+        Ok(p)
+    }
+
     /// `impl_ex_reject` as given (≥ 1), else its default: on with the
     /// interface IMPL-EX, off otherwise.
     fn impl_ex_reject(&self) -> Result<Option<f64>, SolverSpecError> {
