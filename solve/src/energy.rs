@@ -133,27 +133,24 @@ pub struct EnergyTracker<'a> {
     force_factor: f64,
     tets: Vec<TetGeometry>,
     kernels: Vec<InterfaceKernel>,
-    u_old: Vec<f64>,
-    stress_old: Vec<[f64; 6]>,
-    traction_old: Vec<[f64; 3]>,
-    lambda_old: f64,
-    force_old: f64,
     rows: Vec<EnergyRow>,
-    /// The state of the last [`EnergyTracker::trial`], kept until it is
-    /// accepted: its stresses and tractions become the next step's old
-    /// ones.
-    trial: Trial,
+    /// The last kept step, from which the next one's trapezoids start.
+    old: Evaluated,
+    /// The step of the last [`EnergyTracker::trial`], until it is
+    /// accepted (it then becomes `old`) or another trial replaces it.
+    trial: Evaluated,
+    trial_row: Option<EnergyRow>,
 }
 
-/// A step evaluated by [`EnergyTracker::trial`] and not yet accepted.
+/// One evaluated state: displacement, each point's stress or traction,
+/// λ and the curve's force.
 #[derive(Default)]
-struct Trial {
+struct Evaluated {
     u: Vec<f64>,
     stress: Vec<[f64; 6]>,
     traction: Vec<[f64; 3]>,
     lambda: f64,
     force: f64,
-    row: Option<EnergyRow>,
 }
 
 impl<'a> EnergyTracker<'a> {
@@ -199,13 +196,16 @@ impl<'a> EnergyTracker<'a> {
             force_factor: model.symmetry.force_factor(),
             tets,
             kernels,
-            u_old: u.to_vec(),
-            stress_old: vec![[0.0; 6]; model.tets.len()],
-            traction_old: vec![[0.0; 3]; INTERFACE_POINTS * model.interfaces.len()],
-            lambda_old: lambda,
-            force_old: force,
             rows,
-            trial: Trial::default(),
+            old: Evaluated {
+                u: u.to_vec(),
+                stress: vec![[0.0; 6]; model.tets.len()],
+                traction: vec![[0.0; 3]; INTERFACE_POINTS * model.interfaces.len()],
+                lambda,
+                force,
+            },
+            trial: Evaluated::default(),
+            trial_row: None,
         };
         tracker.check_sizes(u, states)?;
         // The old stresses of the next step: the converged state's own.
@@ -218,9 +218,9 @@ impl<'a> EnergyTracker<'a> {
     /// went back to an earlier step): its rows replace the tracker's.
     pub fn rewind(&mut self, start: EnergyStart<'_>) -> Result<(), EnergyError> {
         self.check_sizes(start.u, start.states)?;
-        self.u_old = start.u.to_vec();
-        self.lambda_old = start.lambda;
-        self.force_old = start.force;
+        self.old.u = start.u.to_vec();
+        self.old.lambda = start.lambda;
+        self.old.force = start.force;
         self.rows = start.rows;
         self.sweep(start.u, start.states)?;
         self.take_trial_stresses();
@@ -229,9 +229,9 @@ impl<'a> EnergyTracker<'a> {
 
     /// Makes the last sweep's stresses and tractions the old ones.
     fn take_trial_stresses(&mut self) {
-        std::mem::swap(&mut self.stress_old, &mut self.trial.stress);
-        std::mem::swap(&mut self.traction_old, &mut self.trial.traction);
-        self.trial.row = None;
+        std::mem::swap(&mut self.old.stress, &mut self.trial.stress);
+        std::mem::swap(&mut self.old.traction, &mut self.trial.traction);
+        self.trial_row = None;
     }
 
     fn check_sizes(&self, u: &[f64], states: &States) -> Result<(), EnergyError> {
@@ -265,16 +265,17 @@ impl<'a> EnergyTracker<'a> {
     /// from the stored old values, Σ stored energy), both on the model, and
     /// keeps the new stresses and tractions in the trial.
     fn sweep(&mut self, u: &[f64], states: &States) -> Result<(f64, f64), EnergyError> {
-        let (model, laws, u_old) = (self.model, self.laws, &self.u_old);
+        let (model, laws, old) = (self.model, self.laws, &self.old);
+        let u_old = &old.u;
         let tets = &self.tets;
         let trial = &mut self.trial;
-        trial.stress.resize(self.stress_old.len(), [0.0; 6]);
-        trial.traction.resize(self.traction_old.len(), [0.0; 3]);
+        trial.stress.resize(old.stress.len(), [0.0; 6]);
+        trial.traction.resize(old.traction.len(), [0.0; 3]);
         let bulk: Vec<Result<(f64, f64), EnergyError>> =
             trial
                 .stress
                 .par_chunks_mut(CHUNK)
-                .zip(self.stress_old.par_chunks(CHUNK))
+                .zip(old.stress.par_chunks(CHUNK))
                 .enumerate()
                 .map(|(c, (chunk, olds))| {
                     let (mut work, mut stored) = (0.0, 0.0);
@@ -305,7 +306,7 @@ impl<'a> EnergyTracker<'a> {
         let iface: Vec<Result<(f64, f64), EnergyError>> = trial
             .traction
             .par_chunks_mut(CHUNK * INTERFACE_POINTS)
-            .zip(self.traction_old.par_chunks(CHUNK * INTERFACE_POINTS))
+            .zip(old.traction.par_chunks(CHUNK * INTERFACE_POINTS))
             .enumerate()
             .map(|(c, (chunk, old_chunk))| {
                 let (mut work, mut stored) = (0.0, 0.0);
@@ -376,10 +377,10 @@ impl<'a> EnergyTracker<'a> {
         states: &States,
     ) -> Result<EnergyRow, EnergyError> {
         self.check_sizes(u, states)?;
-        self.trial.row = None;
+        self.trial_row = None;
         let (work, stored) = self.sweep(u, states)?;
         let last = self.rows.last().copied().unwrap_or_default();
-        let w_ext = last.w_ext + 0.5 * (self.force_old + force) * (lambda - self.lambda_old);
+        let w_ext = last.w_ext + 0.5 * (self.old.force + force) * (lambda - self.old.lambda);
         let w_int = last.w_int + self.force_factor * work;
         let stored = self.force_factor * stored;
         let row = EnergyRow {
@@ -391,18 +392,17 @@ impl<'a> EnergyTracker<'a> {
         let trial = &mut self.trial;
         trial.u.clear();
         trial.u.extend_from_slice(u);
-        (trial.lambda, trial.force, trial.row) = (lambda, force, Some(row));
+        (trial.lambda, trial.force) = (lambda, force);
+        self.trial_row = Some(row);
         Ok(row)
     }
 
     /// Adds the last trial's step; without one, does nothing.
     pub fn accept(&mut self) {
-        let Some(row) = self.trial.row else {
+        let Some(row) = self.trial_row.take() else {
             return;
         };
-        std::mem::swap(&mut self.u_old, &mut self.trial.u);
-        (self.lambda_old, self.force_old) = (self.trial.lambda, self.trial.force);
-        self.take_trial_stresses();
+        std::mem::swap(&mut self.old, &mut self.trial);
         self.rows.push(row);
     }
 

@@ -128,16 +128,32 @@ pub enum StepFailure {
         /// λ increment of the redone step, m.
         next_step: f64,
     },
-    /// A converged step whose dissipated energy fell by more than
-    /// `solver.dissipation_tolerance` × W_ext: the laws cannot reach its
-    /// state from the last one (each of them only dissipates, but for the
-    /// FCZM's small non-potential exchange), so Newton found another
-    /// solution of the equilibrium equations than the path's, typically a
-    /// force jump after explicit retries or holds.
-    #[error("the converged state gives back {drop:e} of W_ext from the dissipated energy, more than solver.dissipation_tolerance {limit:e}: it is not on the path of the laws. {regimes}")]
+    /// A converged step that gave back from the dissipated energy more
+    /// than `solver.dissipation_tolerance` of its own external work (and
+    /// more than a floor of W_ext): the laws cannot reach its state from
+    /// the last one (each of them only dissipates, but for the FCZM's
+    /// non-potential exchange, a small part of a step's work), so Newton
+    /// found another solution of the equilibrium equations than the
+    /// path's, typically a force jump after explicit retries or holds.
+    #[error("the converged state gives back {of_step_work:.3} of its step's external work from the dissipated energy ({of_total_work:e} of W_ext), more than solver.dissipation_tolerance {limit}: it is not on the path of the laws. {regimes}")]
     CreatesEnergy {
+        /// −ΔW_diss / |ΔW_ext| of the step.
+        of_step_work: f64,
         /// −ΔW_diss / W_ext.
-        drop: f64,
+        of_total_work: f64,
+        limit: f64,
+        regimes: RegimeChanges,
+    },
+    /// A converged step (a retry whose tets' damage passes did not settle)
+    /// in which the forces left out of balance did more work than
+    /// `solver.dissipation_tolerance` of the step's external work (and a
+    /// floor of W_ext): W_ext and W_int part by that much.
+    #[error("the converged state is out of balance: the residual forces did {of_step_work:.3} of its step's external work ({of_total_work:e} of W_ext), more than solver.dissipation_tolerance {limit}. {regimes}")]
+    OutOfBalance {
+        /// |Δ(W_ext − W_int)| / |ΔW_ext| of the step.
+        of_step_work: f64,
+        /// |Δ(W_ext − W_int)| / W_ext.
+        of_total_work: f64,
         limit: f64,
         regimes: RegimeChanges,
     },
@@ -158,6 +174,7 @@ impl StepFailure {
             | StepFailure::LinearSolve { regimes, .. }
             | StepFailure::Unsettled { regimes, .. }
             | StepFailure::CreatesEnergy { regimes, .. }
+            | StepFailure::OutOfBalance { regimes, .. }
             | StepFailure::IterationLimit { regimes, .. } => Some(regimes),
             _ => None,
         }
