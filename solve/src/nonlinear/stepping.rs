@@ -1153,9 +1153,11 @@ impl<'a> Driver<'a> {
 
     /// The energies of the state the step reached at (`u`, `lambda`) (the
     /// workspace's trial, its retried points released), and the failure
-    /// that refuses it when its dissipated energy falls by more than
-    /// `solver.dissipation_tolerance` × W_ext. The state is the tracker's
-    /// trial until the commit accepts it.
+    /// that refuses it when it gives back from the dissipated energy, or
+    /// leaves forces out of balance whose work is, more than
+    /// `solver.dissipation_tolerance` of the work the step received plus
+    /// [`DISSIPATION_FLOOR`] of W_ext. The state is the tracker's trial
+    /// until the commit accepts it.
     fn energy_rejection(
         &mut self,
         path: &mut Path,

@@ -76,9 +76,9 @@ pub struct Summary {
     /// the steps sample the curve's bends; 0 when not checked.
     #[serde(default)]
     pub curve_max_deviation: f64,
-    /// Converged states refused because their dissipated energy fell by
-    /// more than `solver.dissipation_tolerance` × W_ext (counted among the
-    /// cut-backs too).
+    /// Converged states refused because they gave back dissipated energy,
+    /// or left forces out of balance, beyond `solver.dissipation_tolerance`
+    /// (counted among the cut-backs too).
     #[serde(default)]
     pub dissipation_rejections: usize,
     /// Tets whose damage is integrated explicitly (IMPL-EX): all under
