@@ -106,6 +106,9 @@ struct Review {
     /// The regime changes from the committed state to the accepted one,
     /// counted before the retried points are released.
     changes: RegimeChanges,
+    /// The step's force (N), FED (m) and σ_mb (Pa), measured once for the
+    /// curve's bend, the energy and the curve row.
+    measured: (f64, f64, f64),
 }
 
 /// The converged state of a run between steps.
@@ -425,27 +428,8 @@ impl<'a> Driver<'a> {
         lin.factorisations = cp.summary.factorisations;
         lin.pcg_iterations = cp.summary.pcg_iterations;
         lin.krylov_iterations = cp.summary.krylov_iterations;
-        self.energy = if cp.energy.len() == cp.rows.len() {
-            EnergyTracker::resume(
-                self.problem.model,
-                self.problem.laws,
-                EnergyStart {
-                    u: &cp.u,
-                    states: &cp.states,
-                    rows: cp.energy,
-                    lambda: cp.u_imposed,
-                    force: cp.rows.last().map_or(0.0, |r| r.force),
-                },
-            )
-            .map_err(|e| e.to_string())
-        } else {
-            Err(format!(
-                "the checkpoint's energy record holds {} steps, its curve {}",
-                cp.energy.len(),
-                cp.rows.len()
-            ))
-        };
-        Ok(Path {
+        let energy = cp.energy;
+        let path = Path {
             u: cp.u,
             committed: cp.states,
             rows: cp.rows,
@@ -461,7 +445,22 @@ impl<'a> Driver<'a> {
             steel_yielding: false,
             damaging_tets: 0,
             zone_paused: false,
-        })
+        };
+        self.energy = if energy.len() == path.rows.len() {
+            EnergyTracker::resume(
+                self.problem.model,
+                self.problem.laws,
+                energy_start(&path, energy),
+            )
+            .map_err(|e| e.to_string())
+        } else {
+            Err(format!(
+                "the checkpoint's energy record holds {} steps, its curve {}",
+                energy.len(),
+                path.rows.len()
+            ))
+        };
+        Ok(path)
     }
 
     /// The end of the loading: λ at `u_final`, or the FED at `fed_stop`.
@@ -909,7 +908,7 @@ impl<'a> Driver<'a> {
             tracker.accept();
         }
         path.lambda = lambda;
-        let (force, fed, bond) = self.problem.measurement.eval(&path.u, &self.ws.f_int);
+        let (force, fed, bond) = review.measured;
         let row = CurveRow {
             step: path.rows.len() + 1,
             u_imposed: path.lambda,
@@ -1133,12 +1132,13 @@ impl<'a> Driver<'a> {
         if attempt.failure.is_some() {
             return Ok(review);
         }
+        review.measured = self.problem.measurement.eval(u, &self.ws.f_int);
         review.impl_ex_residual = self.implicit_history(&path.committed, u, step_wall)?;
         if let Some(e) = review.impl_ex_residual {
             attempt.failure = self.rejection(path, plan, e);
         }
         if attempt.failure.is_none() {
-            review.curve = self.curve_bend(path, plan, u);
+            review.curve = self.curve_bend(path, plan, review.measured);
             if let Some((deviation, _)) = review.curve {
                 attempt.failure = self.curve_rejection(path, plan, deviation);
             }
@@ -1146,7 +1146,8 @@ impl<'a> Driver<'a> {
         if attempt.failure.is_none() {
             review.changes = RegimeChanges::between(&path.committed, &self.ws.trial);
             release_retried(&mut self.ws.trial, &self.explicit);
-            attempt.failure = self.energy_rejection(path, (u, lambda), review.changes);
+            attempt.failure =
+                self.energy_rejection(path, (u, lambda, review.measured.0), review.changes);
         }
         Ok(review)
     }
@@ -1161,7 +1162,7 @@ impl<'a> Driver<'a> {
     fn energy_rejection(
         &mut self,
         path: &mut Path,
-        (u, lambda): (&[f64], f64),
+        (u, lambda, force): (&[f64], f64, f64),
         regimes: RegimeChanges,
     ) -> Option<StepFailure> {
         // Points integrated explicitly for the whole run take their stress
@@ -1175,7 +1176,6 @@ impl<'a> Driver<'a> {
             self.settings.dissipation_tolerance
         };
         let tracker = self.energy.as_mut().ok()?;
-        let (force, _, _) = self.problem.measurement.eval(u, &self.ws.f_int);
         let row = match tracker.trial(lambda, force, u, &self.ws.trial) {
             Ok(row) => row,
             Err(e) => {
@@ -1186,11 +1186,11 @@ impl<'a> Driver<'a> {
         let last = tracker.rows().last().copied().unwrap_or_default();
         // The work the step received: a step back along a snap-back
         // receives none, and gives back nothing but the floor.
-        let step_work = (row.w_ext - last.w_ext).max(0.0);
-        let allowed = limit * step_work + DISSIPATION_FLOOR * row.w_ext;
         if limit == 0.0 || row.w_ext <= 0.0 {
             return None;
         }
+        let step_work = (row.w_ext - last.w_ext).max(0.0);
+        let allowed = limit * step_work + DISSIPATION_FLOOR * row.w_ext;
         let given_back = last.dissipated - row.dissipated;
         // The work of the forces left out of balance in the step: a
         // retried step whose tets' damage passes did not settle.
@@ -1225,7 +1225,12 @@ impl<'a> Driver<'a> {
     /// steps' lengths, whence the geometric mean in the next size. `None`
     /// when the control is off, under path-following or before the first
     /// step.
-    fn curve_bend(&self, path: &Path, plan: &Plan, u: &[f64]) -> Option<(f64, f64)> {
+    fn curve_bend(
+        &self,
+        path: &Path,
+        plan: &Plan,
+        (_, fed, bond): (f64, f64, f64),
+    ) -> Option<(f64, f64)> {
         let loading = self.loading;
         let tolerance = loading.curve_tolerance;
         if tolerance <= 0.0
@@ -1237,7 +1242,6 @@ impl<'a> Driver<'a> {
         let rows = &path.rows;
         let last = rows.last()?;
         let before = rows.len().checked_sub(2).map(|i| &rows[i]);
-        let (_, fed, bond) = self.problem.measurement.eval(u, &self.ws.f_int);
         let fed_range = loading.fed_stop.unwrap_or(loading.u_final);
         let stress_range = rows
             .iter()
@@ -1462,14 +1466,7 @@ impl<'a> Driver<'a> {
         if let Ok(tracker) = &mut self.energy {
             let mut rows = tracker.rows().to_vec();
             rows.truncate(back.rows.len());
-            let start = EnergyStart {
-                u: &back.u,
-                states: &back.committed,
-                rows,
-                lambda: back.lambda,
-                force: back.rows.last().map_or(0.0, |r| r.force),
-            };
-            if let Err(e) = tracker.rewind(start) {
+            if let Err(e) = tracker.rewind(energy_start(&back, rows)) {
                 self.energy = Err(format!("going back to step {}: {e}", back.rows.len()));
             }
         }
@@ -1797,6 +1794,18 @@ impl<'a> Driver<'a> {
             .as_ref()
             .map(|t| t.rows().to_vec())
             .map_err(Clone::clone)
+    }
+}
+
+/// The converged state of `path` for the energy record to continue from,
+/// with `rows` the energies of its steps.
+fn energy_start(path: &Path, rows: Vec<EnergyRow>) -> EnergyStart<'_> {
+    EnergyStart {
+        u: &path.u,
+        states: &path.committed,
+        rows,
+        lambda: path.lambda,
+        force: path.rows.last().map_or(0.0, |r| r.force),
     }
 }
 
