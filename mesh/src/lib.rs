@@ -18,6 +18,7 @@
 //! ```
 
 pub mod build;
+pub mod crack;
 pub mod error;
 pub mod gmsh_run;
 pub mod half_turn;

@@ -553,20 +553,33 @@ fn report_ending(ctx: &Ctx, ending: &solve::nonlinear::Ending) {
             u_imposed,
             snap_back_to,
             unsettled_points,
+            cracked_through_tets,
             damaging_concrete_tets,
             concrete_tets,
         } => {
-            let beyond = if unsettled_points > 0 {
+            let mut beyond = if unsettled_points > 0 {
                 format!(
                     "beyond it no state at dissipation control's smallest step is in balance \
                      ({unsettled_points} held interface points do not settle)"
                 )
-            } else {
+            } else if snap_back_to < u_imposed {
                 format!(
                     "beyond it the path snaps back to u = {:.4} mm",
                     snap_back_to * 1e3
                 )
+            } else {
+                format!(
+                    "beyond it no state at dissipation control's smallest step is in balance \
+                     (its attempt reached u = {:.4} mm)",
+                    snap_back_to * 1e3
+                )
             };
+            if cracked_through_tets > 0 {
+                beyond = format!(
+                    "its concrete is cracked through the cover ({cracked_through_tets} tets \
+                     with D ≥ 0.9 from the bar to the cube's faces); {beyond}"
+                );
+            }
             ctx.printer.line(&format!(
                 "solve: ended at a brittle failure: F = {force:.1} N at u = {:.4} mm is the \
                  failure load; {beyond} with concrete damage spreading in \

@@ -87,6 +87,10 @@ const SNAP_BACK: f64 = 0.5;
 /// ... and concrete damage growing in at least this share of the
 /// concrete tets in that iterate: a failure spreading through the cube.
 const SPREADING: f64 = 0.01;
+/// Concrete tets at or above this damage form a crack band; one that
+/// crosses the cover from the bar to the cube's faces splits the cube
+/// (see [`Driver::brittle_failure`]).
+const CRACKED: f64 = 0.9;
 
 /// A displacement-controlled step whose curve bends by more than this
 /// multiple of `loading.curve_tolerance` is redone shorter.
@@ -1561,9 +1565,21 @@ impl<'a> Driver<'a> {
         // 0.133 to 0.455 mm, damage growing in 2 400 of the tets).
         let wandered = path.summary.interface_holds_from_step == Some(1)
             && lambda > (2.0 - SNAP_BACK) * path.lambda;
+        // With no remedy left, a stall whose converged state is cracked
+        // through the cover is the split itself, wherever λ went (the
+        // on-demand suite's whole-specimen split: D ≥ 0.9 from the bar to
+        // the faces at its 25.8 MPa plateau, where r1-coarse's damage at
+        // the end of its curve stays inside the cover).
+        let cracked_through = self.cracked_through(path);
+        let remedy_left = self.settings.interface_holds == InterfaceHolds::OnStall
+            && path
+                .summary
+                .interface_holds_from_step
+                .is_some_and(|k| k > 1);
+        let split = cracked_through > 0 && !remedy_left;
         let (force, u_imposed) = if lambda < SNAP_BACK * path.lambda {
             (last.force, path.lambda)
-        } else if snapped || wandered || unsettled_points > 0 {
+        } else if snapped || wandered || unsettled_points > 0 || split {
             (peak.force, peak.u_imposed)
         } else {
             return None;
@@ -1573,9 +1589,22 @@ impl<'a> Driver<'a> {
             u_imposed,
             snap_back_to: lambda,
             unsettled_points: if snapped { 0 } else { unsettled_points },
+            cracked_through_tets: cracked_through,
             damaging_concrete_tets: damaging,
             concrete_tets: concrete,
         })
+    }
+
+    /// Concrete tets of the last converged state with damage of at least
+    /// [`CRACKED`] in bands from the bar to the cube's faces.
+    fn cracked_through(&self, path: &Path) -> usize {
+        let cracked: Vec<bool> = path
+            .committed
+            .bulk
+            .iter()
+            .map(|s| s.damage >= CRACKED)
+            .collect();
+        self.problem.model.cover_crossing_tets(&cracked)
     }
 
     /// Of a failed attempt whose last iterate grew concrete damage in at
@@ -1629,6 +1658,7 @@ impl<'a> Driver<'a> {
             u_imposed: peak.u_imposed,
             snap_back_to: path.lambda,
             unsettled_points: 0,
+            cracked_through_tets: self.cracked_through(path),
             damaging_concrete_tets: damaging,
             concrete_tets: concrete,
         })

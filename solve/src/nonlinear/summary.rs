@@ -167,6 +167,14 @@ pub enum Ending {
         /// snapped back.
         #[serde(default)]
         unsettled_points: usize,
+        /// Concrete tets of the last converged state with D ≥ 0.9 in bands
+        /// that cross the cover from the bar to the cube's lateral faces
+        /// (the split's crack; 0 where the damage stays inside the cover).
+        /// With no remedy left, such a band is the split's evidence where
+        /// the stalled attempt neither snapped back nor left held points
+        /// unsettled.
+        #[serde(default)]
+        cracked_through_tets: usize,
         /// Concrete tets whose damage grew in that attempt's last iterate,
         /// of all concrete tets.
         damaging_concrete_tets: usize,
