@@ -10,9 +10,7 @@ use crate::assembly::{
 use crate::linalg::amg::{AmgError, AmgParams};
 use crate::linalg::multigrid::{FreeDofMultigrid, NodeBlockLayout};
 use crate::linalg::{Cholesky, LinearError, Preconditioner};
-use crate::spec::solver::{
-    ConcreteIntegration, LinearSolverKind, Precision, PreconditionerKind, SolverSettings,
-};
+use crate::spec::solver::{LinearSolverKind, Precision, PreconditionerKind, SolverSettings};
 use std::time::Instant;
 
 pub(crate) struct Workspace<'a> {
@@ -72,8 +70,7 @@ impl Workspace<'_> {
                 lower: Some(&mut self.lower),
                 upper,
                 load: self.load.as_mut(),
-                kept_bulk: (self.settings.concrete_integration == ConcreteIntegration::ImplEx)
-                    .then_some(&mut self.kept_bulk),
+                kept_bulk: Some(&mut self.kept_bulk),
             },
         )?;
         self.wall.add_eval(&t);
