@@ -1566,10 +1566,9 @@ impl<'a> Driver<'a> {
         let wandered = path.summary.interface_holds_from_step == Some(1)
             && lambda > (2.0 - SNAP_BACK) * path.lambda;
         // With no remedy left, a stall whose converged state is cracked
-        // through the cover is the split itself, wherever λ went (the
-        // on-demand suite's whole-specimen split: D ≥ 0.9 from the bar to
-        // the faces at its 25.8 MPa plateau, where r1-coarse's damage at
-        // the end of its curve stays inside the cover).
+        // through the cover is the split itself, wherever λ went: the
+        // ring of concrete that held the ribs' radial push is cut
+        // (docs/solver.md, "How a run ends").
         let cracked_through = self.cracked_through(path);
         let remedy_left = self.settings.interface_holds == InterfaceHolds::OnStall
             && path

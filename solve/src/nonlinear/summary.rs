@@ -157,8 +157,9 @@ pub enum Ending {
         u_imposed: f64,
         /// The imposed displacement the dissipation-controlled attempt
         /// fell back to, m (its own λ when the evidence is
-        /// `unsettled_points`, or where its iterates carried λ forward by
-        /// more than half, the points held from the first step).
+        /// `unsettled_points` or `cracked_through_tets`, or where its
+        /// iterates carried λ forward by more than half, the points held
+        /// from the first step).
         snap_back_to: f64,
         /// Interface points held for the attempt at dissipation control's
         /// smallest step that did not settle: the split's other evidence,
