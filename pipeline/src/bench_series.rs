@@ -42,6 +42,9 @@ pub struct RunRecord {
     /// How a completed run ended: `completed` (the end of the loading),
     /// `limit_load` or `unloaded` (solve.json `ending.kind`).
     pub ending: Option<String>,
+    /// Of a `brittle_failure`: concrete tets cracked through the cover
+    /// (solve.json `ending.cracked_through_tets`).
+    pub cracked_through_tets: Option<u64>,
     pub dofs: Option<u64>,
     pub steps: Option<u64>,
     pub iterations: Option<u64>,
@@ -102,6 +105,7 @@ impl RunRecord {
                 .pointer("/ending/kind")
                 .and_then(Value::as_str)
                 .map(str::to_string),
+            cracked_through_tets: u(&solve, "/ending/cracked_through_tets"),
             dofs: u(&solve, "/summary/dofs"),
             steps: u(&solve, "/summary/steps"),
             iterations: u(&solve, "/summary/total_iterations"),
@@ -730,6 +734,10 @@ pub fn stress_report(
         ended("unloaded"),
         ended("brittle_failure"),
     );
+    let cracked = cases
+        .iter()
+        .filter(|c| c.record.completed && c.record.cracked_through_tets.is_some_and(|n| n > 0))
+        .count();
     let panics = cases.iter().filter(|c| c.panicked).count();
     let nans = cases.iter().filter(|c| c.non_finite).count();
     let unexplained = cases.iter().filter(|c| !c.explained()).count();
@@ -743,7 +751,8 @@ pub fn stress_report(
         "# Numerical-stability stress sweep\n\n\
          Command: `{command}`\n\n\
          Study `{}` ({}): {n} cases; {completed} completed ({limit_loads} of them at the \
-         bar's limit load, {brittle} at a brittle failure (the cube splits at its peak), \
+         bar's limit load, {brittle} at a brittle failure (the cube splits at its peak; \
+         {cracked} of them with the cover cracked through), \
          {unloaded} unloaded: split through or pulled free; \
          docs/solver.md, \"How a run ends\"), {} stopped with a reason, \
          {panics} panics, {nans} with a non-finite value in curve.csv, {unexplained} unexplained, \
@@ -770,10 +779,13 @@ pub fn stress_report(
             c.name,
             c.parameters,
             if r.completed { "yes" } else { "no" },
-            if r.completed {
-                r.ending.as_deref().unwrap_or("–")
-            } else {
-                "–"
+            match (r.completed, r.cracked_through_tets) {
+                (false, _) => "–".to_string(),
+                (true, Some(n)) if n > 0 => format!(
+                    "{} (cover cracked: {n} tets)",
+                    r.ending.as_deref().unwrap_or("–")
+                ),
+                (true, _) => r.ending.as_deref().unwrap_or("–").to_string(),
             },
             r.steps.map_or("–".into(), |d| d.to_string()),
             fmt_opt(r.curve.last().map(|x| x.u_imposed), 1e3, 4),
