@@ -15,10 +15,13 @@ impl Model {
     /// of the region at (x, 0, z)). 0 where no band crosses the cover.
     pub fn cover_crossing_tets(&self, marked: &[bool]) -> usize {
         let n = self.nodes.len();
+        let counts = |t: usize| {
+            marked.get(t).copied().unwrap_or(false) && self.tet_region[t] == Region::Concrete
+        };
         let mut sets = DisjointSets::new(n);
         let mut any = false;
         for (t, tet) in self.tets.iter().enumerate() {
-            if !marked.get(t).copied().unwrap_or(false) || self.tet_region[t] != Region::Concrete {
+            if !counts(t) {
                 continue;
             }
             any = true;
@@ -61,12 +64,10 @@ impl Model {
             .iter()
             .enumerate()
             .filter(|&(t, tet)| {
-                marked.get(t).copied().unwrap_or(false)
-                    && self.tet_region[t] == Region::Concrete
-                    && {
-                        let root = sets.find(tet[0] as usize);
-                        at_bar[root] && at_face[root]
-                    }
+                counts(t) && {
+                    let root = sets.find(tet[0] as usize);
+                    at_bar[root] && at_face[root]
+                }
             })
             .count()
     }

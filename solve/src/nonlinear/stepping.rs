@@ -1417,12 +1417,7 @@ impl<'a> Driver<'a> {
             if let Some(failure) = self.brittle_failure(&path, plan, lambda, &reason) {
                 return Ok(Outcome::End(failure, path));
             }
-            if self.settings.interface_holds == InterfaceHolds::OnStall
-                && path
-                    .summary
-                    .interface_holds_from_step
-                    .is_some_and(|k| k > 1)
-            {
+            if self.may_hold_from_start(&path) {
                 // Held from the step before the stall, the points did not
                 // settle either: the run starts again with them held from
                 // step 1, as under `always` (docs/solver.md, "Holds after a
@@ -1570,12 +1565,7 @@ impl<'a> Driver<'a> {
         // ring of concrete that held the ribs' radial push is cut
         // (docs/solver.md, "How a run ends").
         let cracked_through = self.cracked_through(path);
-        let remedy_left = self.settings.interface_holds == InterfaceHolds::OnStall
-            && path
-                .summary
-                .interface_holds_from_step
-                .is_some_and(|k| k > 1);
-        let split = cracked_through > 0 && !remedy_left;
+        let split = cracked_through > 0 && !self.may_hold_from_start(path);
         let (force, u_imposed) = if lambda < SNAP_BACK * path.lambda {
             (last.force, path.lambda)
         } else if snapped || wandered || unsettled_points > 0 || split {
@@ -1592,6 +1582,17 @@ impl<'a> Driver<'a> {
             damaging_concrete_tets: damaging,
             concrete_tets: concrete,
         })
+    }
+
+    /// Whether a stall may still start the run again with the interface
+    /// points held from step 1: under `on_stall`, once they were held from
+    /// a later step ("Holds after a stall").
+    fn may_hold_from_start(&self, path: &Path) -> bool {
+        self.settings.interface_holds == InterfaceHolds::OnStall
+            && path
+                .summary
+                .interface_holds_from_step
+                .is_some_and(|k| k > 1)
     }
 
     /// Concrete tets of the last converged state with damage of at least

@@ -499,10 +499,11 @@ pub struct SolverSettings {
     #[serde(default, skip_serializing_if = "is_auto_preconditioner")]
     pub preconditioner: PreconditionerKind,
     /// A converged step that gives back from the dissipated energy (W_int
-    /// − stored, over the whole specimen) more than this fraction of its
-    /// own external work, and more than 1e-3 of W_ext, reached a state the
-    /// laws cannot reach from the last one: it is refused like a failed
-    /// attempt (docs/solver.md, "Steps that create energy"). 0 disables.
+    /// − stored, over the whole specimen), or leaves forces out of balance
+    /// whose work is, more than this fraction of its own external work
+    /// plus 2e-3 of W_ext, reached a state the laws cannot reach from the
+    /// last one: it is refused like a failed attempt (docs/solver.md,
+    /// "Steps that create energy"). 0 disables.
     /// Always serialised, so that a change of it (or of its default)
     /// re-runs the solve.
     #[serde(default = "default_dissipation_tolerance")]
