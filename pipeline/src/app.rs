@@ -54,7 +54,16 @@ where
         Verbosity::Normal
     };
     let printer = Printer::new(verbosity);
-    match dispatch(cli.command, &printer) {
+    // The command runs on a worker of rayon's pool rather than on the
+    // calling thread. Every parallel loop called from outside the pool
+    // hands its work to the workers and parks the caller until they
+    // finish; the solve makes thousands of such calls per second (each
+    // Krylov iteration's triangular solves, each assembly), and on r1-coarse
+    // that hand-off cost a third of the solve (docs/performance.md,
+    // "The command on a pool worker"). From a worker the same loops
+    // split on its own deque and the results are unchanged.
+    let outcome = rayon::scope(|_| dispatch(cli.command, &printer));
+    match outcome {
         Ok(code) if code == ExitCode::SUCCESS => 0,
         Ok(_) => 1,
         // A reader that closed the pipe (`ribbar status ... | head -1`)
