@@ -577,7 +577,8 @@ fn report_ending(ctx: &Ctx, ending: &solve::nonlinear::Ending) {
             if cracked_through_tets > 0 {
                 beyond = format!(
                     "its concrete is cracked through the cover ({cracked_through_tets} tets \
-                     with D ≥ 0.9 from the bar to the cube's faces); {beyond}"
+                     with D ≥ {} from the bar to the cube's faces); {beyond}",
+                    solve::nonlinear::CRACKED
                 );
             }
             ctx.printer.line(&format!(

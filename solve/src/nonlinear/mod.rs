@@ -25,4 +25,4 @@ pub use report::{
     CommittedView, CurveRow, Cutback, Ending, Observer, RunResult, Silent, SolveError, StepReport,
     Summary, WallTimes,
 };
-pub use stepping::{run, Problem};
+pub use stepping::{run, Problem, CRACKED};

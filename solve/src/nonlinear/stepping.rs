@@ -90,7 +90,7 @@ const SPREADING: f64 = 0.01;
 /// Concrete tets at or above this damage form a crack band; one that
 /// crosses the cover from the bar to the cube's faces splits the cube
 /// (see [`Driver::brittle_failure`]).
-const CRACKED: f64 = 0.9;
+pub const CRACKED: f64 = 0.9;
 
 /// A displacement-controlled step whose curve bends by more than this
 /// multiple of `loading.curve_tolerance` is redone shorter.
