@@ -276,7 +276,11 @@ impl Cholesky {
             return self.solve_in_place(rhs);
         };
         assert!(self.factored, "solve before factorize");
-        let par: Par = faer::get_global_parallelism();
+        // One thread: faer's parallel triangular solve with one right-hand
+        // side hands small pieces of each supernode to the pool, which on
+        // r1-coarse cost more than it gained (GMRES 24-26 -> 18.5-19.4 s),
+        // and its sums depended on the number of threads.
+        let par = Par::Seq;
         let n = rhs.len();
         let llt = LltRef::<'_, usize, f32>::new(&self.symbolic, single);
         let req = self.symbolic.solve_in_place_scratch::<f32>(1, par);
@@ -726,6 +730,52 @@ mod tests {
             "{info:?}: {}",
             norm(&res) / norm(&b)
         );
+    }
+
+    /// The single-precision preconditioner gives the same bits whatever
+    /// the number of threads, so a run's curve does not depend on the
+    /// machine's cores (a 3D grid Laplacian, big enough for faer to split
+    /// its supernodes among threads).
+    #[test]
+    fn the_preconditioner_does_not_depend_on_the_number_of_threads() {
+        let side = 22;
+        let at = |i: usize, j: usize, k: usize| (i * side + j) * side + k;
+        let n = side * side * side;
+        let (mut cp, mut ri, mut v) = (vec![0], vec![], vec![]);
+        for i in 0..side {
+            for j in 0..side {
+                for k in 0..side {
+                    let c = at(i, j, k);
+                    ri.push(c);
+                    v.push(6.01);
+                    for (di, dj, dk) in [(0, 0, 1), (0, 1, 0), (1, 0, 0)] {
+                        let (p, q, r) = (i + di, j + dj, k + dk);
+                        if p < side && q < side && r < side {
+                            ri.push(at(p, q, r));
+                            v.push(-1.0);
+                        }
+                    }
+                    cp.push(ri.len());
+                }
+            }
+        }
+        let dof_node: Vec<usize> = (0..n).collect();
+        let mut c = Cholesky::new(&cp, &ri, Ordering::Metis, &dof_node).unwrap();
+        c.set_single_precision_preconditioner(true);
+        c.factorize(&v).unwrap();
+        let b: Vec<f64> = (0..n).map(|i| (i as f64 * 0.37).sin()).collect();
+        let applied = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            let mut x = b.clone();
+            pool.install(|| c.precondition(&mut x)).unwrap();
+            x
+        };
+        let one = applied(1);
+        assert_eq!(one, applied(2));
+        assert_eq!(one, applied(4));
     }
 
     /// The parallel product (column ranges summed apart) equals the serial
