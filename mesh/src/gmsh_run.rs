@@ -104,9 +104,9 @@ fn gmsh_options(geo: &Path, spec: &MeshSpec) -> Vec<String> {
         ("Mesh.OptimizeNetgen", netgen.to_string()),
         ("General.NumThreads", spec.threads.to_string()),
         // OpenCASCADE's booleans on their own threads: a ribbed bar's
-        // fuse of core and ribs is most of the mesh stage (r1-coarse: 12.7
-        // → 8.3 s to open the script on 2 cores, the mesh bit-identical;
-        // docs/performance.md, "Parallel booleans").
+        // fuse of core and ribs is most of the mesh stage, and the result
+        // (hence the mesh) is the same as the serial one
+        // (docs/performance.md, "r1-coarse end to end").
         ("Geometry.OCCParallel", "1".to_string()),
         ("Mesh.ElementOrder", "1".to_string()),
         ("h_interface", format!("{:e}", spec.h_interface)),

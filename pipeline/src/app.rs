@@ -58,10 +58,9 @@ where
     // calling thread. Every parallel loop called from outside the pool
     // hands its work to the workers and parks the caller until they
     // finish; the solve makes thousands of such calls per second (each
-    // Krylov iteration's triangular solves, each assembly), and on r1-coarse
-    // that hand-off cost a third of the solve (docs/performance.md,
-    // "The command on a pool worker"). From a worker the same loops
-    // split on its own deque and the results are unchanged.
+    // Krylov iteration, each assembly), and the hand-offs weighed on it
+    // (docs/performance.md, "r1-coarse end to end"). From a worker the
+    // same loops split on its own deque, with the same results.
     let outcome = rayon::scope(|_| dispatch(cli.command, &printer));
     match outcome {
         Ok(code) if code == ExitCode::SUCCESS => 0,
