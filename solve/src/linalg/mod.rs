@@ -139,6 +139,12 @@ pub fn metis_ordering(
     let mut perm = vec![0i32; m];
     let mut iperm = vec![0i32; m];
     if m > 1 {
+        // METIS draws from one random generator shared by the whole
+        // process (GKlib's), reseeded at each call: two calls at once
+        // interleave its draws and order differently. One call at a
+        // time keeps an ordering the same from run to run.
+        static METIS: std::sync::Mutex<()> = std::sync::Mutex::new(());
+        let _one_at_a_time = METIS.lock().unwrap_or_else(|e| e.into_inner());
         let mut nv = m as i32;
         let mut options = [0i32; metis_sys::METIS_NOPTIONS as usize];
         // SAFETY: arrays sized as METIS documents (xadj m+1, adjncy 2|E|, perm/iperm m).
@@ -277,9 +283,10 @@ impl Cholesky {
         };
         assert!(self.factored, "solve before factorize");
         // One thread: faer's parallel triangular solve with one right-hand
-        // side hands small pieces of each supernode to the pool, which on
-        // r1-coarse cost more than it gained (GMRES 24-26 -> 18.5-19.4 s),
-        // and its sums depended on the number of threads.
+        // side hands small pieces of each supernode to the pool, which
+        // costs more than it gains at the sizes this preconditioner is
+        // chosen for (docs/performance.md, "r1-coarse end to end"), and
+        // its sums depended on the number of threads.
         let par = Par::Seq;
         let n = rhs.len();
         let llt = LltRef::<'_, usize, f32>::new(&self.symbolic, single);
@@ -732,10 +739,51 @@ mod tests {
         );
     }
 
-    /// The single-precision preconditioner gives the same bits whatever
-    /// the number of threads, so a run's curve does not depend on the
-    /// machine's cores (a 3D grid Laplacian, big enough for faer to split
-    /// its supernodes among threads).
+    /// METIS orders a graph the same way when other threads call it at the
+    /// same time (its random generator is shared by the process).
+    #[test]
+    fn concurrent_metis_calls_order_alike() {
+        let side = 16;
+        let at = |i: usize, j: usize, k: usize| (i * side + j) * side + k;
+        let n = side * side * side;
+        let (mut cp, mut ri) = (vec![0], vec![]);
+        for i in 0..side {
+            for j in 0..side {
+                for k in 0..side {
+                    ri.push(at(i, j, k));
+                    for (p, q, r) in [(i, j, k + 1), (i, j + 1, k), (i + 1, j, k)] {
+                        if p < side && q < side && r < side {
+                            ri.push(at(p, q, r));
+                        }
+                    }
+                    cp.push(ri.len());
+                }
+            }
+        }
+        let dof_node: Vec<usize> = (0..n).collect();
+        let alone = metis_ordering(&cp, &ri, &dof_node).unwrap();
+        std::thread::scope(|s| {
+            let runs: Vec<_> = (0..4)
+                .map(|_| {
+                    s.spawn(|| {
+                        (0..10)
+                            .map(|_| metis_ordering(&cp, &ri, &dof_node).unwrap())
+                            .collect::<Vec<_>>()
+                    })
+                })
+                .collect();
+            for run in runs {
+                for ordering in run.join().unwrap() {
+                    assert!(ordering == alone, "a concurrent call ordered differently");
+                }
+            }
+        });
+    }
+
+    /// The factorisation and the single-precision preconditioner give the
+    /// same bits whatever the number of threads, so a run's curve does
+    /// not depend on the machine's cores (a 3D grid Laplacian, big enough
+    /// for faer to split its supernodes among threads).
     #[test]
     fn the_preconditioner_does_not_depend_on_the_number_of_threads() {
         let side = 22;
@@ -760,9 +808,6 @@ mod tests {
             }
         }
         let dof_node: Vec<usize> = (0..n).collect();
-        let mut c = Cholesky::new(&cp, &ri, Ordering::Metis, &dof_node).unwrap();
-        c.set_single_precision_preconditioner(true);
-        c.factorize(&v).unwrap();
         let b: Vec<f64> = (0..n).map(|i| (i as f64 * 0.37).sin()).collect();
         let applied = |threads: usize| {
             let pool = rayon::ThreadPoolBuilder::new()
@@ -770,7 +815,13 @@ mod tests {
                 .build()
                 .unwrap();
             let mut x = b.clone();
-            pool.install(|| c.precondition(&mut x)).unwrap();
+            pool.install(|| {
+                let mut c = Cholesky::new(&cp, &ri, Ordering::Metis, &dof_node).unwrap();
+                c.set_single_precision_preconditioner(true);
+                c.factorize(&v).unwrap();
+                c.precondition(&mut x)
+            })
+            .unwrap();
             x
         };
         let one = applied(1);
