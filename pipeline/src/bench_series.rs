@@ -66,6 +66,13 @@ pub struct RunRecord {
 }
 
 impl RunRecord {
+    /// Tets cracked through the cover of a completed run that ended with
+    /// some (a `brittle_failure` whose cover split); `None` otherwise.
+    pub fn cover_cracked(&self) -> Option<u64> {
+        self.cracked_through_tets
+            .filter(|&n| self.completed && n > 0)
+    }
+
     /// Geometry + mesh + solve wall time, s (missing stages count 0).
     pub fn total_time(&self) -> Option<f64> {
         self.t_solve
@@ -736,7 +743,7 @@ pub fn stress_report(
     );
     let cracked = cases
         .iter()
-        .filter(|c| c.record.completed && c.record.cracked_through_tets.is_some_and(|n| n > 0))
+        .filter(|c| c.record.cover_cracked().is_some())
         .count();
     let panics = cases.iter().filter(|c| c.panicked).count();
     let nans = cases.iter().filter(|c| c.non_finite).count();
@@ -779,13 +786,13 @@ pub fn stress_report(
             c.name,
             c.parameters,
             if r.completed { "yes" } else { "no" },
-            match (r.completed, r.cracked_through_tets) {
+            match (r.completed, r.cover_cracked()) {
                 (false, _) => "–".to_string(),
-                (true, Some(n)) if n > 0 => format!(
+                (true, Some(n)) => format!(
                     "{} (cover cracked: {n} tets)",
                     r.ending.as_deref().unwrap_or("–")
                 ),
-                (true, _) => r.ending.as_deref().unwrap_or("–").to_string(),
+                (true, None) => r.ending.as_deref().unwrap_or("–").to_string(),
             },
             r.steps.map_or("–".into(), |d| d.to_string()),
             fmt_opt(r.curve.last().map(|x| x.u_imposed), 1e3, 4),
