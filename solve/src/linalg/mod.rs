@@ -739,28 +739,35 @@ mod tests {
         );
     }
 
-    /// METIS orders a graph the same way when other threads call it at the
-    /// same time (its random generator is shared by the process).
-    #[test]
-    fn concurrent_metis_calls_order_alike() {
-        let side = 16;
+    /// 7-point Laplacian (slightly shifted, SPD) on a side³ grid, one
+    /// unknown per grid point, lower CSC with sorted rows.
+    fn grid_laplacian(side: usize) -> (Vec<usize>, Vec<usize>, Vec<f64>) {
         let at = |i: usize, j: usize, k: usize| (i * side + j) * side + k;
-        let n = side * side * side;
-        let (mut cp, mut ri) = (vec![0], vec![]);
+        let (mut cp, mut ri, mut v) = (vec![0], vec![], vec![]);
         for i in 0..side {
             for j in 0..side {
                 for k in 0..side {
                     ri.push(at(i, j, k));
+                    v.push(6.01);
                     for (p, q, r) in [(i, j, k + 1), (i, j + 1, k), (i + 1, j, k)] {
                         if p < side && q < side && r < side {
                             ri.push(at(p, q, r));
+                            v.push(-1.0);
                         }
                     }
                     cp.push(ri.len());
                 }
             }
         }
-        let dof_node: Vec<usize> = (0..n).collect();
+        (cp, ri, v)
+    }
+
+    /// METIS orders a graph the same way when other threads call it at the
+    /// same time (its random generator is shared by the process).
+    #[test]
+    fn concurrent_metis_calls_order_alike() {
+        let (cp, ri, _) = grid_laplacian(16);
+        let dof_node: Vec<usize> = (0..cp.len() - 1).collect();
         let alone = metis_ordering(&cp, &ri, &dof_node).unwrap();
         std::thread::scope(|s| {
             let runs: Vec<_> = (0..4)
@@ -786,27 +793,8 @@ mod tests {
     /// for faer to split its supernodes among threads).
     #[test]
     fn the_preconditioner_does_not_depend_on_the_number_of_threads() {
-        let side = 22;
-        let at = |i: usize, j: usize, k: usize| (i * side + j) * side + k;
-        let n = side * side * side;
-        let (mut cp, mut ri, mut v) = (vec![0], vec![], vec![]);
-        for i in 0..side {
-            for j in 0..side {
-                for k in 0..side {
-                    let c = at(i, j, k);
-                    ri.push(c);
-                    v.push(6.01);
-                    for (di, dj, dk) in [(0, 0, 1), (0, 1, 0), (1, 0, 0)] {
-                        let (p, q, r) = (i + di, j + dj, k + dk);
-                        if p < side && q < side && r < side {
-                            ri.push(at(p, q, r));
-                            v.push(-1.0);
-                        }
-                    }
-                    cp.push(ri.len());
-                }
-            }
-        }
+        let (cp, ri, v) = grid_laplacian(22);
+        let n = cp.len() - 1;
         let dof_node: Vec<usize> = (0..n).collect();
         let b: Vec<f64> = (0..n).map(|i| (i as f64 * 0.37).sin()).collect();
         let applied = |threads: usize| {
