@@ -2,15 +2,19 @@
 //! n³ hexahedra split into tets (bottom face fixed): pattern build,
 //! constitutive + assembly pass, METIS vs AMD symbolic analysis, numeric
 //! Cholesky, one solve, 20 triangular-solve pairs in f64 and with L rounded
-//! to f32 (sequential and on 2 threads), and PCG on a perturbed matrix
-//! preconditioned by the first factor in either precision. `RIBBAR_BENCH_N`
-//! sets n (default 30, ≈ 89 k DOFs).
+//! to f32 (sequential and on 2 threads), PCG on a perturbed matrix
+//! preconditioned by the first factor in either precision, and the
+//! multigrid's set-up and V-cycle (only that with
+//! `RIBBAR_BENCH_MULTIGRID_ONLY` set). `RIBBAR_BENCH_N` sets n (default 30,
+//! ≈ 89 k DOFs).
 
 use mesh::{Model, Region};
 use solve::assembly::{ElementLaws, Outputs, States, System, Tangents};
 use solve::laws::elastic::LinearElastic;
 use solve::laws::TangentKind;
-use solve::linalg::{pcg, Cholesky, Ordering, SymLower};
+use solve::linalg::amg::AmgParams;
+use solve::linalg::multigrid::NodeBlockLayout;
+use solve::linalg::{pcg, Cholesky, Ordering, Preconditioner, SymLower};
 use std::time::Instant;
 
 fn cube(n: usize) -> Model {
@@ -132,6 +136,10 @@ fn main() {
     let b: Vec<f64> = (0..dof_node.len())
         .map(|i| ((i % 7) as f64 - 3.0) * 1e3)
         .collect();
+    multigrid(&m, &sys, &k, &b);
+    if std::env::var_os("RIBBAR_BENCH_MULTIGRID_ONLY").is_some() {
+        return;
+    }
     let mut first = None;
     for ord in [Ordering::Metis, Ordering::Amd] {
         let t = Instant::now();
@@ -200,4 +208,37 @@ fn main() {
             info
         );
     }
+}
+
+/// The multigrid hierarchy of K (rigid-body near-null space): set-up, and
+/// 50 V-cycles applied to the right-hand side (the preconditioner of every
+/// GMRES iteration of a multigrid run), with a checksum of the last.
+fn multigrid(m: &Model, sys: &System, k: &[f64], b: &[f64]) {
+    let dofs = sys.dofs();
+    let t = Instant::now();
+    let layout = NodeBlockLayout::new(
+        &sys.col_ptr,
+        &sys.row_idx,
+        |d| dofs.free_index(d),
+        &m.nodes,
+        &[],
+    )
+    .unwrap();
+    let mg = layout.build(k, AmgParams::default()).unwrap();
+    let t_setup = t.elapsed().as_secs_f64();
+    let mut z = b.to_vec();
+    let t = Instant::now();
+    // On a pool worker, as `ribbar` runs its commands.
+    rayon::scope(|_| {
+        for _ in 0..50 {
+            z.copy_from_slice(b);
+            mg.apply(&mut z).unwrap();
+        }
+    });
+    let checksum: f64 = z.iter().map(|v| v.abs()).sum();
+    println!(
+        "multigrid: set-up {t_setup:.3} s  50 V-cycles {:.3} s  levels {:?}  checksum {checksum:.12e}",
+        t.elapsed().as_secs_f64(),
+        mg.info().level_dofs
+    );
 }

@@ -11,6 +11,7 @@
 
 use super::amg::{Amg, AmgError, AmgInfo, AmgParams, Bsr, Work};
 use super::{LinearError, Preconditioner};
+use rayon::prelude::*;
 use std::sync::Mutex;
 
 const NONE: u32 = u32::MAX;
@@ -150,9 +151,14 @@ impl NodeBlockLayout {
     pub fn build(&self, lower: &[f64], params: AmgParams) -> Result<FreeDofMultigrid, AmgError> {
         let amg = Amg::with_charts(self.matrix(lower), &self.null_space, &self.charts, params)?;
         let work = amg.workspace();
+        let mut global_to_free = vec![NONE; 3 * self.n_nodes];
+        for (f, &g) in self.free_to_global.iter().enumerate() {
+            global_to_free[g as usize] = f as u32;
+        }
         Ok(FreeDofMultigrid {
             amg,
             free_to_global: self.free_to_global.clone(),
+            global_to_free,
             scratch: Mutex::new(Scratch {
                 work,
                 r: vec![0.0; 3 * self.n_nodes],
@@ -200,6 +206,8 @@ struct Scratch {
 pub struct FreeDofMultigrid {
     amg: Amg,
     free_to_global: Vec<u32>,
+    /// Per global DOF its free index, [`NONE`] when constrained.
+    global_to_free: Vec<u32>,
     scratch: Mutex<Scratch>,
 }
 
@@ -214,17 +222,18 @@ impl Preconditioner for FreeDofMultigrid {
     fn apply(&self, r: &mut [f64]) -> Result<(), LinearError> {
         let mut guard = self.scratch.lock().unwrap_or_else(|e| e.into_inner());
         let s = &mut *guard;
-        s.r.iter_mut().for_each(|v| *v = 0.0);
-        for (&g, &v) in self.free_to_global.iter().zip(r.iter()) {
-            s.r[g as usize] = v;
-        }
+        let free = &*r;
+        s.r.par_iter_mut()
+            .zip(&self.global_to_free)
+            .for_each(|(v, &f)| *v = if f == NONE { 0.0 } else { free[f as usize] });
         self.amg
             .apply(&s.r, &mut s.z, &mut s.work)
             .map_err(|_| LinearError::NonFinite)?;
-        for (&g, v) in self.free_to_global.iter().zip(r.iter_mut()) {
-            *v = s.z[g as usize];
-        }
-        if r.iter().all(|v| v.is_finite()) {
+        let z = &s.z;
+        r.par_iter_mut()
+            .zip(&self.free_to_global)
+            .for_each(|(v, &g)| *v = z[g as usize]);
+        if r.par_iter().all(|v| v.is_finite()) {
             Ok(())
         } else {
             Err(LinearError::NonFinite)
