@@ -433,6 +433,10 @@ pub struct Outputs<'a> {
     /// same step, used and refreshed when the matrix is asked for without
     /// the load derivatives (see [`KeptBulkMatrix`]).
     pub kept_bulk: Option<&'a mut KeptBulkMatrix>,
+    /// The tets' stresses from [`BulkLaw::stress`], without their history
+    /// update: the trial states of the tets are left as they are. Forces
+    /// only (no matrix).
+    pub stress_only: bool,
 }
 
 impl<'a> Outputs<'a> {
@@ -444,6 +448,16 @@ impl<'a> Outputs<'a> {
             upper: None,
             load: None,
             kept_bulk: None,
+            stress_only: false,
+        }
+    }
+
+    /// Internal forces only, from the tets' stresses without their history
+    /// (see [`Outputs::stress_only`]).
+    pub fn forces_of_stresses(f_int: &'a mut [f64]) -> Self {
+        Self {
+            stress_only: true,
+            ..Self::forces(f_int)
         }
     }
     /// Internal forces and the lower-triangle tangent values.
@@ -709,6 +723,11 @@ impl System {
                 "the load derivatives need the element matrices: ask for the matrix too".into(),
             ));
         }
+        if out.stress_only && out.lower.is_some() {
+            return Err(AssemblyError::Model(
+                "an evaluation without the tets' history gives forces only".into(),
+            ));
+        }
         if let Some(l) = out.load.as_deref_mut() {
             l.clear();
         }
@@ -742,6 +761,7 @@ impl System {
     ) -> Result<(), AssemblyError> {
         let Input { laws, u, committed } = *input;
         let want_k = out.lower.is_some();
+        let stress_only = out.stress_only;
         let f_int = &mut *out.f_int;
         let mut matrix = out.lower.as_deref_mut();
         let mut upper = out.upper.as_deref_mut();
@@ -777,13 +797,27 @@ impl System {
                 let d = tet_dofs(&self.tets[index]);
                 let ue: [f64; 12] = std::array::from_fn(|i| u[d[i]]);
                 let strain = g.strain(&ue);
+                let law_error = |source| AssemblyError::BulkLaw {
+                    index,
+                    region: self.tet_region[index],
+                    source,
+                };
+                if stress_only {
+                    let stress = laws.tets[index]
+                        .stress(&committed.bulk[index], &strain)
+                        .map_err(law_error)?;
+                    if !stress.iter().all(|v| v.is_finite()) {
+                        return Err(AssemblyError::NonFiniteBulk {
+                            index,
+                            what: "stress",
+                        });
+                    }
+                    g.internal_force(&stress, f);
+                    return Ok(());
+                }
                 let r = laws.tets[index]
                     .step(&committed.bulk[index], &strain, bulk_kind)
-                    .map_err(|source| AssemblyError::BulkLaw {
-                        index,
-                        region: self.tet_region[index],
-                        source,
-                    })?;
+                    .map_err(law_error)?;
                 if !r.stress.iter().all(|v| v.is_finite()) {
                     return Err(AssemblyError::NonFiniteBulk {
                         index,

@@ -71,8 +71,8 @@ pub fn bulk_point(
     state: &BulkState,
     strain: &Vector6<f64>,
 ) -> Result<(Vector6<f64>, f64), LawError> {
-    let r = law.step(state, strain, TangentKind::Secant)?;
-    Ok((r.stress, law.stored_energy(state, strain, &r.stress)))
+    let stress = law.stress(state, strain)?;
+    Ok((stress, law.stored_energy(state, strain, &stress)))
 }
 
 /// Energies after a converged step, J (whole specimen).

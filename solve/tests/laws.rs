@@ -720,6 +720,59 @@ fn mazars_impl_ex_stress_uses_the_extrapolated_damage() {
     }
 }
 
+/// `BulkLaw::stress` (no history update) gives the bits of `step`'s secant
+/// stress for every law and state: virgin, damaged, IMPL-EX with the
+/// committed or a larger extrapolated damage, plastic steel; and the same
+/// error for a non-finite strain.
+#[test]
+fn stress_without_history_is_the_step_stress() {
+    let law = mazars();
+    let e0 = law.eps_d0;
+    let damaged = bulk_history(
+        &law,
+        &[[1.5 * e0, -0.3 * e0, -0.3 * e0, 0.2 * e0, 0.0, 0.0]],
+    );
+    assert!(damaged.damage > 0.0);
+    let strains = [
+        Vector6::new(0.2 * e0, -0.05 * e0, 0.0, 0.1 * e0, 0.0, 0.0),
+        Vector6::new(3.0 * e0, -0.6 * e0, -0.6 * e0, 0.5 * e0, 0.1 * e0, 0.0),
+        Vector6::new(0.5 * e0, -0.1 * e0, -0.1 * e0, 0.0, 0.0, 0.0),
+        Vector6::new(-2.0 * e0, 0.4 * e0, 0.4 * e0, 0.0, 0.0, 0.3 * e0),
+    ];
+    let mut states = vec![BulkState::default(), damaged];
+    for base in [BulkState::default(), damaged] {
+        for d in [base.damage, 0.5 * (1.0 + base.damage)] {
+            states.push(BulkState {
+                explicit_damage: Some(d),
+                ..base
+            });
+        }
+    }
+    for state in &states {
+        for e in &strains {
+            let step = law.step(state, e, TangentKind::Secant).unwrap().stress;
+            assert_eq!(law.stress(state, e).unwrap(), step, "{state:?} {e:?}");
+        }
+    }
+    let nan = Vector6::new(f64::NAN, 0.0, 0.0, 0.0, 0.0, 0.0);
+    for state in &states {
+        assert_eq!(
+            law.stress(state, &nan).unwrap_err(),
+            law.step(state, &nan, TangentKind::Secant).unwrap_err()
+        );
+    }
+    let steel = j2();
+    let yielded = bulk_history(&steel, &[[0.01, -0.005, -0.005, 0.0, 0.0, 0.0]]);
+    for e in &strains {
+        let e = e * 1e3;
+        let step = steel
+            .step(&yielded, &e, TangentKind::Secant)
+            .unwrap()
+            .stress;
+        assert_eq!(steel.stress(&yielded, &e).unwrap(), step);
+    }
+}
+
 /// IMPL-EX extrapolation: κ̃ = κ + ratio·Δκ through the law's own D(κ, α_t):
 /// ratio 0 gives the committed damage, the extrapolated damage grows with
 /// the ratio, stays in [D, 1] and, for a step like the last one, matches

@@ -414,6 +414,7 @@ fn consistent_tangent(
             upper: Some(&mut upper),
             load: None,
             kept_bulk: kept,
+            stress_only: false,
         },
     )
     .unwrap();
@@ -571,6 +572,7 @@ fn load_derivatives_match_finite_differences() {
             upper: None,
             load: Some(&mut load),
             kept_bulk: None,
+            stress_only: false,
         },
     )
     .unwrap();
@@ -1880,6 +1882,40 @@ fn kept_element_matrices_assemble_the_full_tangent() {
         "{} kept",
         kept.kept_tets()
     );
+    // Forces from the stresses alone (the IMPL-EX indicator's evaluation):
+    // the bits of the full evaluation's forces, the trial tets untouched,
+    // from the implicit and the IMPL-EX start; no matrix that way.
+    let u = field(3e-6, 3.0);
+    for from in [&damaged, &start] {
+        let (mut full, mut lean) = (vec![0.0; n], vec![0.0; n]);
+        let mut trial = from.clone();
+        let kind = Tangents::all(TangentKind::Secant);
+        sys.evaluate(
+            &laws,
+            &u,
+            from,
+            &mut trial,
+            kind,
+            Outputs::forces(&mut full),
+        )
+        .unwrap();
+        let mut untouched = States::initial(&m);
+        untouched.interface.clone_from(&trial.interface);
+        let mut lean_trial = untouched.clone();
+        let out = Outputs::forces_of_stresses(&mut lean);
+        sys.evaluate(&laws, &u, from, &mut lean_trial, kind, out)
+            .unwrap();
+        assert_eq!(lean, full);
+        assert_eq!(lean_trial.bulk, untouched.bulk);
+        let mut k = vec![0.0; sys.nnz()];
+        let out = Outputs {
+            stress_only: true,
+            ..Outputs::with_matrix(&mut lean, &mut k)
+        };
+        assert!(sys
+            .evaluate(&laws, &u, from, &mut lean_trial, kind, out)
+            .is_err());
+    }
 }
 
 /// A concrete prism of square section `width` (one element across) and

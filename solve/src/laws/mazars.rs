@@ -258,6 +258,19 @@ fn voigt_to_tensor(e: &Vector6<f64>) -> Matrix3<f64> {
 }
 
 impl Mazars {
+    /// A virgin point whose strain norm stays below ε_D0 is elastic:
+    /// ε_eq = ‖⟨ε⟩₊‖ ≤ ‖ε‖ (Frobenius), so κ cannot reach ε_D0. Most of a
+    /// specimen is in this state; it skips the eigen-decomposition.
+    fn stays_elastic(&self, committed: &BulkState, strain: &Vector6<f64>) -> bool {
+        if !(committed.damage == 0.0 && committed.kappa <= self.eps_d0) {
+            return false;
+        }
+        let shear = strain[3] * strain[3] + strain[4] * strain[4] + strain[5] * strain[5];
+        let norm2 =
+            strain[0] * strain[0] + strain[1] * strain[1] + strain[2] * strain[2] + 0.5 * shear;
+        norm2 <= self.eps_d0 * self.eps_d0
+    }
+
     pub fn stiffness(&self) -> Matrix6<f64> {
         isotropic_stiffness(self.young_modulus, self.poisson_ratio)
     }
@@ -365,6 +378,28 @@ impl BulkLaw for Mazars {
         }
     }
 
+    /// Under IMPL-EX the stress is (1 − D̃) C ε with the extrapolated D̃:
+    /// no eigen-decomposition (which only the implicit history needs).
+    fn stress(
+        &self,
+        committed: &BulkState,
+        strain: &Vector6<f64>,
+    ) -> Result<Vector6<f64>, LawError> {
+        const LAW: &str = "mazars";
+        let Some(d_stress) = committed.explicit_damage else {
+            return Ok(self.step(committed, strain, TangentKind::Secant)?.stress);
+        };
+        check_finite(LAW, "strain", strain.as_slice())?;
+        let c = self.stiffness();
+        let stress = if self.stays_elastic(committed, strain) {
+            c * strain
+        } else {
+            (c * strain) * (1.0 - d_stress)
+        };
+        check_result(LAW, "stress", stress.as_slice())?;
+        Ok(stress)
+    }
+
     fn step(
         &self,
         committed: &BulkState,
@@ -374,28 +409,20 @@ impl BulkLaw for Mazars {
         const LAW: &str = "mazars";
         check_finite(LAW, "strain", strain.as_slice())?;
         let c = self.stiffness();
-        // A virgin point whose strain norm stays below ε_D0 is elastic:
-        // ε_eq = ‖⟨ε⟩₊‖ ≤ ‖ε‖ (Frobenius), so κ cannot reach ε_D0. Most of a
-        // specimen is in this state; it skips the eigen-decomposition.
-        if committed.damage == 0.0 && committed.kappa <= self.eps_d0 {
-            let shear = strain[3] * strain[3] + strain[4] * strain[4] + strain[5] * strain[5];
-            let norm2 =
-                strain[0] * strain[0] + strain[1] * strain[1] + strain[2] * strain[2] + 0.5 * shear;
-            if norm2 <= self.eps_d0 * self.eps_d0 {
-                let stress = c * strain;
-                check_result(LAW, "stress", stress.as_slice())?;
-                return Ok(BulkResponse {
-                    stress,
-                    tangent: c,
-                    state: BulkState {
-                        kappa: self.eps_d0,
-                        damage: 0.0,
-                        kappa_increment: 0.0,
-                        ..*committed
-                    },
-                    fixed_scale: Some(1.0),
-                });
-            }
+        if self.stays_elastic(committed, strain) {
+            let stress = c * strain;
+            check_result(LAW, "stress", stress.as_slice())?;
+            return Ok(BulkResponse {
+                stress,
+                tangent: c,
+                state: BulkState {
+                    kappa: self.eps_d0,
+                    damage: 0.0,
+                    kappa_increment: 0.0,
+                    ..*committed
+                },
+                fixed_scale: Some(1.0),
+            });
         }
         let eig = SymmetricEigen::new(voigt_to_tensor(strain));
         let principal = eig.eigenvalues;

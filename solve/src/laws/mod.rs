@@ -210,6 +210,18 @@ pub trait BulkLaw: Sync {
         kind: TangentKind,
     ) -> Result<BulkResponse, LawError>;
 
+    /// The stress of [`BulkLaw::step`] (secant kind) at `strain` from
+    /// `committed`, bit for bit, where the history update is not wanted
+    /// (the IMPL-EX error indicator, the energy balance); a law whose
+    /// stress can be had without that update overrides it.
+    fn stress(
+        &self,
+        committed: &BulkState,
+        strain: &Vector6<f64>,
+    ) -> Result<Vector6<f64>, LawError> {
+        Ok(self.step(committed, strain, TangentKind::Secant)?.stress)
+    }
+
     /// The stiffness that [`BulkResponse::fixed_scale`] scales, Pa.
     fn elastic_stiffness(&self) -> Matrix6<f64>;
 
@@ -424,6 +436,18 @@ impl BulkLaw for AnyBulkLaw {
             AnyBulkLaw::Mazars(l) => l.step(committed, strain, kind),
             AnyBulkLaw::J2(l) => l.step(committed, strain, kind),
             AnyBulkLaw::Elastic(l) => l.step(committed, strain, kind),
+        }
+    }
+
+    fn stress(
+        &self,
+        committed: &BulkState,
+        strain: &Vector6<f64>,
+    ) -> Result<Vector6<f64>, LawError> {
+        match self {
+            AnyBulkLaw::Mazars(l) => l.stress(committed, strain),
+            AnyBulkLaw::J2(l) => l.stress(committed, strain),
+            AnyBulkLaw::Elastic(l) => l.stress(committed, strain),
         }
     }
 

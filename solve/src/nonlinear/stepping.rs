@@ -2077,7 +2077,7 @@ fn in_balance(
         start,
         &mut ws.trial,
         Tangents::all(TangentKind::Secant),
-        Outputs::forces(&mut ws.f_int),
+        Outputs::forces_of_stresses(&mut ws.f_int),
     )?;
     let mut r = vec![0.0; system.dofs().n_free()];
     ws.residual(&mut r);

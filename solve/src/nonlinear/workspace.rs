@@ -71,6 +71,7 @@ impl Workspace<'_> {
                 upper,
                 load: self.load.as_mut(),
                 kept_bulk: Some(&mut self.kept_bulk),
+                stress_only: false,
             },
         )?;
         self.wall.add_eval(&t);
