@@ -90,12 +90,29 @@ impl ElementLaws {
 }
 
 /// Committed or trial history of every integration point.
-#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+#[derive(Debug, PartialEq, Default, Serialize, Deserialize)]
 pub struct States {
     /// One per tetrahedron.
     pub bulk: Vec<BulkState>,
     /// [`INTERFACE_POINTS`] per interface element (node pair order).
     pub interface: Vec<InterfaceState>,
+}
+
+impl Clone for States {
+    fn clone(&self) -> Self {
+        Self {
+            bulk: self.bulk.clone(),
+            interface: self.interface.clone(),
+        }
+    }
+
+    /// Into the existing vectors: the solver copies states several times a
+    /// step, and the derived `clone_from` allocated fresh ones each time
+    /// (tens of MB on R1, first touched page by page).
+    fn clone_from(&mut self, source: &Self) {
+        self.bulk.clone_from(&source.bulk);
+        self.interface.clone_from(&source.interface);
+    }
 }
 
 impl States {
