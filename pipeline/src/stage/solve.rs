@@ -109,8 +109,10 @@ impl StageObserver<'_> {
         model: &Model,
         checkpoint: impl FnOnce() -> Checkpoint,
     ) -> Result<()> {
-        self.write_pending_peak(model)?;
+        // The peak's fields count in the cost: while the curve rises they
+        // are written with every checkpoint.
         let started = Instant::now();
+        self.write_pending_peak(model)?;
         let mut checkpoint = checkpoint();
         checkpoint.record = ObserverRecord {
             profile: self.profile.clone(),
@@ -176,11 +178,22 @@ impl Observer for StageObserver<'_> {
         }
         if request.at_peak && !self.peak_passed && r.bond_stress > self.peak && result.is_ok() {
             self.peak = r.bond_stress;
-            self.pending_peak = Some(PeakState {
-                row: *r,
-                u: view.u.to_vec(),
-                states: view.states.clone(),
-            });
+            match &mut self.pending_peak {
+                // Into the last rising step's copy: tens of MB a step on R1.
+                Some(p) => {
+                    p.row = *r;
+                    p.u.clear();
+                    p.u.extend_from_slice(view.u);
+                    p.states.clone_from(view.states);
+                }
+                None => {
+                    self.pending_peak = Some(PeakState {
+                        row: *r,
+                        u: view.u.to_vec(),
+                        states: view.states.clone(),
+                    })
+                }
+            }
         }
         if result.is_ok()
             && self.last_checkpoint.elapsed() >= self.checkpoint_cost * CHECKPOINT_COST_RATIO
