@@ -565,6 +565,15 @@ impl KeptBulkMatrix {
     }
 }
 
+/// `Ok` when every value of tet `index`'s `what` is finite.
+fn finite(values: &[f64], index: usize, what: &'static str) -> Result<(), AssemblyError> {
+    if values.iter().all(|v| v.is_finite()) {
+        Ok(())
+    } else {
+        Err(AssemblyError::NonFiniteBulk { index, what })
+    }
+}
+
 /// One tet's element matrix for the response `r` into `k`, unless it is
 /// already in the kept sum (`kept`: the scale it was kept with, NaN if
 /// not); a kept tet whose tangent has moved gets the difference.
@@ -812,46 +821,31 @@ impl System {
                 let index = start + off;
                 let g = &self.tet_geom[index];
                 let d = tet_dofs(&self.tets[index]);
-                let ue: [f64; 12] = std::array::from_fn(|i| u[d[i]]);
-                let strain = g.strain(&ue);
+                let strain = g.strain(&std::array::from_fn(|i| u[d[i]]));
                 let law_error = |source| AssemblyError::BulkLaw {
                     index,
                     region: self.tet_region[index],
                     source,
                 };
+                let law = &laws.tets[index];
                 if stress_only {
-                    let stress = laws.tets[index]
+                    let stress = law
                         .stress(&committed.bulk[index], &strain)
                         .map_err(law_error)?;
-                    if !stress.iter().all(|v| v.is_finite()) {
-                        return Err(AssemblyError::NonFiniteBulk {
-                            index,
-                            what: "stress",
-                        });
-                    }
+                    finite(stress.as_slice(), index, "stress")?;
                     g.internal_force(&stress, f);
                     return Ok(());
                 }
-                let r = laws.tets[index]
+                let r = law
                     .step(&committed.bulk[index], &strain, bulk_kind)
                     .map_err(law_error)?;
-                if !r.stress.iter().all(|v| v.is_finite()) {
-                    return Err(AssemblyError::NonFiniteBulk {
-                        index,
-                        what: "stress",
-                    });
-                }
+                finite(r.stress.as_slice(), index, "stress")?;
                 *state = r.state;
                 g.internal_force(&r.stress, f);
                 if let Some((k, action)) = k {
-                    if !r.tangent.iter().all(|v| v.is_finite()) {
-                        return Err(AssemblyError::NonFiniteBulk {
-                            index,
-                            what: "tangent",
-                        });
-                    }
+                    finite(r.tangent.as_slice(), index, "tangent")?;
                     let kept = kept_scale.get(off).copied().unwrap_or(f64::NAN);
-                    *action = tet_matrix(g, &laws.tets[index], &r, reuse, kept, k);
+                    *action = tet_matrix(g, law, &r, reuse, kept, k);
                 }
                 Ok(())
             };
