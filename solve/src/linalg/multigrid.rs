@@ -28,6 +28,8 @@ pub struct NodeBlockLayout {
     constrained_diagonal: Vec<usize>,
     /// Global DOF (`3·node + component`) of each free DOF.
     free_to_global: Vec<u32>,
+    /// Per global DOF its free index, [`NONE`] when constrained.
+    global_to_free: Vec<u32>,
     /// Rigid-body modes, 6 per global DOF, zero on constrained DOFs.
     null_space: Vec<f64>,
     /// Per node, its side of a tied cut (empty: no cut); see
@@ -56,9 +58,11 @@ impl NodeBlockLayout {
         }
         let n_free = col_ptr.len() - 1;
         let mut free_to_global = vec![NONE; n_free];
-        for d in 0..3 * n_nodes {
+        let mut global_to_free = vec![NONE; 3 * n_nodes];
+        for (d, free) in global_to_free.iter_mut().enumerate() {
             if let Some(f) = free_of(d) {
                 free_to_global[f] = d as u32;
+                *free = f as u32;
             }
         }
         if free_to_global.contains(&NONE) {
@@ -121,6 +125,7 @@ impl NodeBlockLayout {
             positions,
             constrained_diagonal,
             free_to_global,
+            global_to_free,
             null_space,
             charts: charts.to_vec(),
         })
@@ -151,14 +156,10 @@ impl NodeBlockLayout {
     pub fn build(&self, lower: &[f64], params: AmgParams) -> Result<FreeDofMultigrid, AmgError> {
         let amg = Amg::with_charts(self.matrix(lower), &self.null_space, &self.charts, params)?;
         let work = amg.workspace();
-        let mut global_to_free = vec![NONE; 3 * self.n_nodes];
-        for (f, &g) in self.free_to_global.iter().enumerate() {
-            global_to_free[g as usize] = f as u32;
-        }
         Ok(FreeDofMultigrid {
             amg,
             free_to_global: self.free_to_global.clone(),
-            global_to_free,
+            global_to_free: self.global_to_free.clone(),
             scratch: Mutex::new(Scratch {
                 work,
                 r: vec![0.0; 3 * self.n_nodes],
