@@ -173,18 +173,21 @@ impl Bsr {
         r: &mut [f64],
     ) {
         debug_assert_eq!(values.len(), self.col_idx.len() * self.br * self.bc);
+        fn square<const R: usize, T: Copy + Into<f64> + Sync>(
+            a: &Bsr,
+            values: &[T],
+            (b, x, r): (&[f64], &[f64], &mut [f64]),
+        ) {
+            a.rows_fixed::<R, R, T>(values, x, r, |i, ri, ax| {
+                for (k, (rk, q)) in ri.iter_mut().zip(ax).enumerate() {
+                    *rk = b[R * i + k] - q;
+                }
+            });
+        }
         if (self.br, self.bc) == (3, 3) {
-            self.rows_fixed::<3, 3, T>(values, x, r, |i, ri, ax| {
-                for (k, (rk, a)) in ri.iter_mut().zip(ax).enumerate() {
-                    *rk = b[3 * i + k] - a;
-                }
-            });
+            square::<3, T>(self, values, (b, x, r));
         } else if (self.br, self.bc) == (6, 6) {
-            self.rows_fixed::<6, 6, T>(values, x, r, |i, ri, ax| {
-                for (k, (rk, a)) in ri.iter_mut().zip(ax).enumerate() {
-                    *rk = b[6 * i + k] - a;
-                }
-            });
+            square::<6, T>(self, values, (b, x, r));
         } else {
             self.mul_with(values, x, r);
             r.par_iter_mut()
@@ -497,13 +500,20 @@ fn apply_dinv(dinv: &[f64], b: usize, r: &[f64], z: &mut [f64]) {
         .zip(dinv.par_chunks(b * b))
         .for_each(|((zi, ri), d)| {
             for (row, zr) in zi.iter_mut().enumerate() {
-                let mut s = 0.0;
-                for c in 0..b {
-                    s += d[row * b + c] * ri[c];
-                }
-                *zr = s;
+                *zr = dinv_row(d, ri, row);
             }
         });
+}
+
+/// Row `row` of one block's D⁻¹ r: `block` (b×b, row-major) times `r_i`.
+#[inline(always)]
+fn dinv_row(block: &[f64], r_i: &[f64], row: usize) -> f64 {
+    let b = r_i.len();
+    let mut s = 0.0;
+    for (c, rc) in r_i.iter().enumerate() {
+        s += block[row * b + c] * rc;
+    }
+    s
 }
 
 /// One Chebyshev iteration after the first on `lev` (B×B blocks) with
@@ -533,11 +543,7 @@ fn chebyshev_pass<const B: usize>(
                 }
                 let dm = &lev.dinv[i * B * B..(i + 1) * B * B];
                 for row in 0..B {
-                    let mut z = 0.0;
-                    for c in 0..B {
-                        z += dm[row * B + c] * ri[c];
-                    }
-                    let dn = c1 * d[i * B + row] + c2 * z;
+                    let dn = c1 * d[i * B + row] + c2 * dinv_row(dm, ri, row);
                     ni[row] = dn;
                     xi[row] += dn;
                 }
@@ -1026,11 +1032,7 @@ impl Amg {
             .zip(lev.dinv.par_chunks(bs * bs))
             .for_each(|(((di, xi), ri), dm)| {
                 for (row, (dr, xr)) in di.iter_mut().zip(xi.iter_mut()).enumerate() {
-                    let mut z = 0.0;
-                    for c in 0..bs {
-                        z += dm[row * bs + c] * ri[c];
-                    }
-                    *dr = z / theta;
+                    *dr = dinv_row(dm, ri, row) / theta;
                     *xr += *dr;
                 }
             });
