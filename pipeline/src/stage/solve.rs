@@ -67,6 +67,22 @@ struct PeakState {
     states: States,
 }
 
+impl PeakState {
+    /// Keeps (`row`, `u`, `states`) in `slot`, into the vectors already
+    /// there: while the curve rises this copies tens of MB a step on R1.
+    fn keep(slot: &mut Option<PeakState>, row: CurveRow, (u, states): (&[f64], &States)) {
+        let p = slot.get_or_insert_with(|| PeakState {
+            row,
+            u: Vec::new(),
+            states: States::default(),
+        });
+        p.row = row;
+        p.u.clear();
+        p.u.extend_from_slice(u);
+        p.states.clone_from(states);
+    }
+}
+
 impl StageObserver<'_> {
     fn write_fields(
         &mut self,
@@ -178,22 +194,7 @@ impl Observer for StageObserver<'_> {
         }
         if request.at_peak && !self.peak_passed && r.bond_stress > self.peak && result.is_ok() {
             self.peak = r.bond_stress;
-            match &mut self.pending_peak {
-                // Into the last rising step's copy: tens of MB a step on R1.
-                Some(p) => {
-                    p.row = *r;
-                    p.u.clear();
-                    p.u.extend_from_slice(view.u);
-                    p.states.clone_from(view.states);
-                }
-                None => {
-                    self.pending_peak = Some(PeakState {
-                        row: *r,
-                        u: view.u.to_vec(),
-                        states: view.states.clone(),
-                    })
-                }
-            }
+            PeakState::keep(&mut self.pending_peak, *r, state);
         }
         if result.is_ok()
             && self.last_checkpoint.elapsed() >= self.checkpoint_cost * CHECKPOINT_COST_RATIO
@@ -255,11 +256,7 @@ impl Observer for StageObserver<'_> {
             self.peak = kept.iter().map(|r| r.bond_stress).fold(0.0, f64::max);
             if let Some(last) = kept.last().filter(|r| r.bond_stress >= self.peak) {
                 if self.ctx.scene.outputs.fields.at_peak {
-                    self.pending_peak = Some(PeakState {
-                        row: *last,
-                        u: view.u.to_vec(),
-                        states: view.states.clone(),
-                    });
+                    PeakState::keep(&mut self.pending_peak, *last, (view.u, view.states));
                 }
             }
         }
