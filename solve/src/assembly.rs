@@ -16,6 +16,7 @@ use crate::laws::{
     AnyBulkLaw, AnyInterfaceLaw, BulkLaw, BulkState, InterfaceState, LawError, TangentKind,
 };
 use mesh::Model;
+use nalgebra::Vector6;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::time::Instant;
@@ -450,10 +451,22 @@ pub struct Outputs<'a> {
     /// same step, used and refreshed when the matrix is asked for without
     /// the load derivatives (see [`KeptBulkMatrix`]).
     pub kept_bulk: Option<&'a mut KeptBulkMatrix>,
-    /// The tets' stresses from [`BulkLaw::stress`], without their history
-    /// update: the trial states of the tets are left as they are. Forces
-    /// only (no matrix).
-    pub stress_only: bool,
+    /// Which tets' history the evaluation updates into the trial states.
+    pub history: TetHistory,
+}
+
+/// Which tets' history an evaluation updates into the trial states.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TetHistory {
+    /// Every tet's ([`BulkLaw::step`]).
+    Updated,
+    /// Every tet's but those whose stress and tangent do not depend on it
+    /// ([`BulkLaw::history_deferrable`]: IMPL-EX concrete), whose trial
+    /// states are left as they are until [`System::update_history`] at the
+    /// converged iterate: Newton's iterates skip their eigen-decompositions.
+    Deferred,
+    /// None: the stresses of [`BulkLaw::stress`], forces only (no matrix).
+    Skipped,
 }
 
 impl<'a> Outputs<'a> {
@@ -465,15 +478,15 @@ impl<'a> Outputs<'a> {
             upper: None,
             load: None,
             kept_bulk: None,
-            stress_only: false,
+            history: TetHistory::Updated,
         }
     }
 
     /// Internal forces only, from the tets' stresses without their history
-    /// (see [`Outputs::stress_only`]).
+    /// ([`TetHistory::Skipped`]).
     pub fn forces_of_stresses(f_int: &'a mut [f64]) -> Self {
         Self {
-            stress_only: true,
+            history: TetHistory::Skipped,
             ..Self::forces(f_int)
         }
     }
@@ -749,7 +762,7 @@ impl System {
                 "the load derivatives need the element matrices: ask for the matrix too".into(),
             ));
         }
-        if out.stress_only && out.lower.is_some() {
+        if out.history == TetHistory::Skipped && out.lower.is_some() {
             return Err(AssemblyError::Model(
                 "an evaluation without the tets' history gives forces only".into(),
             ));
@@ -775,6 +788,53 @@ impl System {
         Ok(timings)
     }
 
+    /// Completes the trial states that an evaluation with
+    /// [`TetHistory::Deferred`] left as they were: each such tet's history
+    /// update at the displacement `u` from the `start` states, as
+    /// [`BulkLaw::step`] makes it. Returns the time spent (s).
+    pub fn update_history(
+        &self,
+        laws: &ElementLaws,
+        u: &[f64],
+        start: &States,
+        trial: &mut States,
+    ) -> Result<f64, AssemblyError> {
+        let t = Instant::now();
+        trial
+            .bulk
+            .par_iter_mut()
+            .enumerate()
+            .try_for_each(|(index, state)| {
+                let law = &laws.tets[index];
+                let committed = &start.bulk[index];
+                if !law.history_deferrable(committed) {
+                    return Ok(());
+                }
+                let strain = self.tet_strain(index, u);
+                let r = law
+                    .step(committed, &strain, TangentKind::Secant)
+                    .map_err(self.bulk_law_error(index))?;
+                *state = r.state;
+                Ok(())
+            })?;
+        Ok(t.elapsed().as_secs_f64())
+    }
+
+    /// The strain of tet `index` at the displacement `u`.
+    fn tet_strain(&self, index: usize, u: &[f64]) -> Vector6<f64> {
+        let d = tet_dofs(&self.tets[index]);
+        self.tet_geom[index].strain(&std::array::from_fn(|i| u[d[i]]))
+    }
+
+    /// The error of tet `index`'s law `source`, with where it happened.
+    fn bulk_law_error(&self, index: usize) -> impl Fn(LawError) -> AssemblyError + '_ {
+        move |source| AssemblyError::BulkLaw {
+            index,
+            region: self.tet_region[index],
+            source,
+        }
+    }
+
     /// The tets' part of [`System::evaluate`], block by block: parallel
     /// kernels into buffers, serial scatter.
     fn evaluate_tets(
@@ -787,7 +847,7 @@ impl System {
     ) -> Result<(), AssemblyError> {
         let Input { laws, u, committed } = *input;
         let want_k = out.lower.is_some();
-        let stress_only = out.stress_only;
+        let history = out.history;
         let f_int = &mut *out.f_int;
         let mut matrix = out.lower.as_deref_mut();
         let mut upper = out.upper.as_deref_mut();
@@ -820,27 +880,25 @@ impl System {
              -> Result<(), AssemblyError> {
                 let index = start + off;
                 let g = &self.tet_geom[index];
-                let d = tet_dofs(&self.tets[index]);
-                let strain = g.strain(&std::array::from_fn(|i| u[d[i]]));
-                let law_error = |source| AssemblyError::BulkLaw {
-                    index,
-                    region: self.tet_region[index],
-                    source,
-                };
+                let strain = self.tet_strain(index, u);
+                let law_error = self.bulk_law_error(index);
                 let law = &laws.tets[index];
-                if stress_only {
-                    let stress = law
-                        .stress(&committed.bulk[index], &strain)
-                        .map_err(law_error)?;
+                let start = &committed.bulk[index];
+                if history == TetHistory::Skipped {
+                    let stress = law.stress(start, &strain).map_err(law_error)?;
                     finite(stress.as_slice(), index, "stress")?;
                     g.internal_force(&stress, f);
                     return Ok(());
                 }
-                let r = law
-                    .step(&committed.bulk[index], &strain, bulk_kind)
-                    .map_err(law_error)?;
+                let r = if history == TetHistory::Deferred && law.history_deferrable(start) {
+                    law.step_without_history(start, &strain, bulk_kind)
+                        .map_err(law_error)?
+                } else {
+                    let r = law.step(start, &strain, bulk_kind).map_err(law_error)?;
+                    *state = r.state;
+                    r
+                };
                 finite(r.stress.as_slice(), index, "stress")?;
-                *state = r.state;
                 g.internal_force(&r.stress, f);
                 if let Some((k, action)) = k {
                     finite(r.tangent.as_slice(), index, "tangent")?;

@@ -723,7 +723,9 @@ fn mazars_impl_ex_stress_uses_the_extrapolated_damage() {
 /// `BulkLaw::stress` (no history update) gives the bits of `step`'s secant
 /// stress for every law and state: virgin, damaged, IMPL-EX with the
 /// committed or a larger extrapolated damage, plastic steel; and the same
-/// error for a non-finite strain.
+/// error for a non-finite strain. `step_without_history` gives `step`'s
+/// stress, tangent and fixed scale for every tangent kind, and leaves the
+/// history where it is deferrable (IMPL-EX) only.
 #[test]
 fn stress_without_history_is_the_step_stress() {
     let law = mazars();
@@ -752,6 +754,28 @@ fn stress_without_history_is_the_step_stress() {
         for e in &strains {
             let step = law.step(state, e, TangentKind::Secant).unwrap().stress;
             assert_eq!(law.stress(state, e).unwrap(), step, "{state:?} {e:?}");
+            // Newton's iterates: everything but the history, for each kind.
+            assert_eq!(
+                law.history_deferrable(state),
+                state.explicit_damage.is_some()
+            );
+            for kind in [
+                TangentKind::Elastic,
+                TangentKind::Secant,
+                TangentKind::Consistent,
+            ] {
+                let step = law.step(state, e, kind).unwrap();
+                let lean = law.step_without_history(state, e, kind).unwrap();
+                assert_eq!(lean.stress, step.stress, "{state:?} {e:?} {kind:?}");
+                assert_eq!(lean.tangent, step.tangent, "{state:?} {e:?} {kind:?}");
+                assert_eq!(lean.fixed_scale, step.fixed_scale, "{state:?} {e:?}");
+                let expected = if law.history_deferrable(state) {
+                    *state
+                } else {
+                    step.state
+                };
+                assert_eq!(lean.state, expected);
+            }
         }
     }
     let nan = Vector6::new(f64::NAN, 0.0, 0.0, 0.0, 0.0, 0.0);

@@ -4,14 +4,15 @@
 use mesh::{Frame, InterfaceElement, InterfaceZone, Model, Region};
 use nalgebra::Vector3;
 use solve::assembly::{
-    ElementLaws, KeptBulkMatrix, LoadDerivatives, Outputs, States, System, Tangents, Tie,
+    ElementLaws, KeptBulkMatrix, LoadDerivatives, Outputs, States, System, Tangents, TetHistory,
+    Tie,
 };
 use solve::laws::elastic::{ElasticInterface, LinearElastic};
 use solve::laws::fczm::{Fczm, DEFAULT_GAMMA};
 use solve::laws::j2::J2;
 use solve::laws::tvergaard::Tvergaard;
 use solve::laws::{AnyBulkLaw, AnyInterfaceLaw};
-use solve::laws::{InterfaceLaw, InterfaceState, TangentKind};
+use solve::laws::{BulkLaw, InterfaceLaw, InterfaceState, TangentKind};
 use solve::linalg::Ordering;
 use solve::nonlinear::{
     run, CommittedView, CurveRow, Dirichlet, Ending, Measurement, Observer, Problem, Silent,
@@ -396,6 +397,19 @@ fn consistent_tangent(
     start: &States,
     kept: Option<&mut KeptBulkMatrix>,
 ) -> (Vec<f64>, Vec<f64>, Vec<f64>, States) {
+    evaluated(sys, laws, u, start, TangentKind::Consistent, kept)
+}
+
+/// Forces, both triangles of the tangent of kind `kind`, and the trial
+/// states at `u` from `start`, every history updated.
+fn evaluated(
+    sys: &System,
+    laws: &ElementLaws,
+    u: &[f64],
+    start: &States,
+    kind: TangentKind,
+    kept: Option<&mut KeptBulkMatrix>,
+) -> (Vec<f64>, Vec<f64>, Vec<f64>, States) {
     let mut trial = start.clone();
     let (mut f, mut lower, mut upper) = (
         vec![0.0; u.len()],
@@ -407,14 +421,14 @@ fn consistent_tangent(
         u,
         start,
         &mut trial,
-        Tangents::all(TangentKind::Consistent),
+        Tangents::all(kind),
         Outputs {
             f_int: &mut f,
             lower: Some(&mut lower),
             upper: Some(&mut upper),
             load: None,
             kept_bulk: kept,
-            stress_only: false,
+            history: TetHistory::Updated,
         },
     )
     .unwrap();
@@ -572,7 +586,7 @@ fn load_derivatives_match_finite_differences() {
             upper: None,
             load: Some(&mut load),
             kept_bulk: None,
-            stress_only: false,
+            history: TetHistory::Updated,
         },
     )
     .unwrap();
@@ -1909,12 +1923,48 @@ fn kept_element_matrices_assemble_the_full_tangent() {
         assert_eq!(lean_trial.bulk, untouched.bulk);
         let mut k = vec![0.0; sys.nnz()];
         let out = Outputs {
-            stress_only: true,
+            history: TetHistory::Skipped,
             ..Outputs::with_matrix(&mut lean, &mut k)
         };
         assert!(sys
             .evaluate(&laws, &u, from, &mut lean_trial, kind, out)
             .is_err());
+    }
+    // Newton's iterates (the history of the IMPL-EX tets deferred): the
+    // bits of the full evaluation's forces and matrix for every tangent
+    // kind; the IMPL-EX tets' trial states untouched, the others' updated;
+    // the deferred update completes them to the full evaluation's.
+    let u = field(3e-6, 3.0);
+    for from in [&damaged, &start] {
+        for kind in [TangentKind::Secant, TangentKind::Consistent] {
+            let (f_full, l_full, u_full, t_full) = evaluated(&sys, &laws, &u, from, kind, None);
+            let mut trial = States::initial(&m);
+            let untouched = trial.clone();
+            let (mut f, mut lower, mut upper) =
+                (vec![0.0; n], vec![0.0; sys.nnz()], vec![0.0; sys.nnz()]);
+            let out = Outputs {
+                f_int: &mut f,
+                lower: Some(&mut lower),
+                upper: Some(&mut upper),
+                load: None,
+                kept_bulk: None,
+                history: TetHistory::Deferred,
+            };
+            sys.evaluate(&laws, &u, from, &mut trial, Tangents::all(kind), out)
+                .unwrap();
+            assert_eq!((&f, &lower, &upper), (&f_full, &l_full, &u_full));
+            for (i, s) in trial.bulk.iter().enumerate() {
+                let deferred = laws.tets[i].history_deferrable(&from.bulk[i]);
+                let expected = if deferred {
+                    &untouched.bulk[i]
+                } else {
+                    &t_full.bulk[i]
+                };
+                assert_eq!(s, expected, "tet {i}");
+            }
+            sys.update_history(&laws, &u, from, &mut trial).unwrap();
+            assert_eq!(trial, t_full);
+        }
     }
 }
 

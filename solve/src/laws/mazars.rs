@@ -378,26 +378,41 @@ impl BulkLaw for Mazars {
         }
     }
 
-    /// Under IMPL-EX the stress is (1 − D̃) C ε with the extrapolated D̃:
-    /// no eigen-decomposition (which only the implicit history needs).
-    fn stress(
+    fn history_deferrable(&self, committed: &BulkState) -> bool {
+        committed.explicit_damage.is_some()
+    }
+
+    /// Under IMPL-EX the stress is (1 − D̃) C ε with the extrapolated D̃
+    /// and the tangent its secant: no eigen-decomposition, which only the
+    /// implicit history needs.
+    fn step_without_history(
         &self,
         committed: &BulkState,
         strain: &Vector6<f64>,
-    ) -> Result<Vector6<f64>, LawError> {
+        kind: TangentKind,
+    ) -> Result<BulkResponse, LawError> {
         const LAW: &str = "mazars";
         let Some(d_stress) = committed.explicit_damage else {
-            return Ok(self.step(committed, strain, TangentKind::Secant)?.stress);
+            return self.step(committed, strain, kind);
         };
         check_finite(LAW, "strain", strain.as_slice())?;
         let c = self.stiffness();
-        let stress = if self.stays_elastic(committed, strain) {
-            c * strain
+        let (stress, tangent, scale) = if self.stays_elastic(committed, strain) {
+            (c * strain, c, 1.0)
+        } else if kind == TangentKind::Elastic {
+            ((c * strain) * (1.0 - d_stress), c, 1.0)
         } else {
-            (c * strain) * (1.0 - d_stress)
+            let scale = 1.0 - d_stress;
+            ((c * strain) * scale, c * scale, scale)
         };
         check_result(LAW, "stress", stress.as_slice())?;
-        Ok(stress)
+        check_result(LAW, "tangent", tangent.as_slice())?;
+        Ok(BulkResponse {
+            stress,
+            tangent,
+            state: *committed,
+            fixed_scale: Some(scale),
+        })
     }
 
     fn step(

@@ -210,16 +210,39 @@ pub trait BulkLaw: Sync {
         kind: TangentKind,
     ) -> Result<BulkResponse, LawError>;
 
+    /// Whether the stress and tangent of [`BulkLaw::step`] from
+    /// `committed` do not depend on its history update (IMPL-EX: the
+    /// extrapolated damage fixes both, and only the next extrapolation
+    /// reads the implicit κ). Newton's iterates may then skip the update
+    /// ([`BulkLaw::step_without_history`]) and make it once, at the
+    /// converged strain.
+    fn history_deferrable(&self, _committed: &BulkState) -> bool {
+        false
+    }
+
+    /// [`BulkLaw::step`]'s stress, tangent and fixed scale, bit for bit;
+    /// where [`BulkLaw::history_deferrable`], without the history update,
+    /// the state returned being `committed`. Elsewhere it is the step.
+    fn step_without_history(
+        &self,
+        committed: &BulkState,
+        strain: &Vector6<f64>,
+        kind: TangentKind,
+    ) -> Result<BulkResponse, LawError> {
+        self.step(committed, strain, kind)
+    }
+
     /// The stress of [`BulkLaw::step`] (secant kind) at `strain` from
     /// `committed`, bit for bit, where the history update is not wanted
-    /// (the IMPL-EX error indicator, the energy balance); a law whose
-    /// stress can be had without that update overrides it.
+    /// (the IMPL-EX error indicator, the energy balance).
     fn stress(
         &self,
         committed: &BulkState,
         strain: &Vector6<f64>,
     ) -> Result<Vector6<f64>, LawError> {
-        Ok(self.step(committed, strain, TangentKind::Secant)?.stress)
+        Ok(self
+            .step_without_history(committed, strain, TangentKind::Secant)?
+            .stress)
     }
 
     /// The stiffness that [`BulkResponse::fixed_scale`] scales, Pa.
@@ -439,15 +462,24 @@ impl BulkLaw for AnyBulkLaw {
         }
     }
 
-    fn stress(
+    fn history_deferrable(&self, committed: &BulkState) -> bool {
+        match self {
+            AnyBulkLaw::Mazars(l) => l.history_deferrable(committed),
+            AnyBulkLaw::J2(l) => l.history_deferrable(committed),
+            AnyBulkLaw::Elastic(l) => l.history_deferrable(committed),
+        }
+    }
+
+    fn step_without_history(
         &self,
         committed: &BulkState,
         strain: &Vector6<f64>,
-    ) -> Result<Vector6<f64>, LawError> {
+        kind: TangentKind,
+    ) -> Result<BulkResponse, LawError> {
         match self {
-            AnyBulkLaw::Mazars(l) => l.stress(committed, strain),
-            AnyBulkLaw::J2(l) => l.stress(committed, strain),
-            AnyBulkLaw::Elastic(l) => l.stress(committed, strain),
+            AnyBulkLaw::Mazars(l) => l.step_without_history(committed, strain, kind),
+            AnyBulkLaw::J2(l) => l.step_without_history(committed, strain, kind),
+            AnyBulkLaw::Elastic(l) => l.step_without_history(committed, strain, kind),
         }
     }
 

@@ -179,4 +179,18 @@ impl StepFailure {
             _ => None,
         }
     }
+
+    /// [`StepFailure::regimes`], to be recounted.
+    pub(crate) fn regimes_mut(&mut self) -> Option<&mut RegimeChanges> {
+        match self {
+            StepFailure::Stagnating { regimes, .. }
+            | StepFailure::Diverging { regimes, .. }
+            | StepFailure::LinearSolve { regimes, .. }
+            | StepFailure::Unsettled { regimes, .. }
+            | StepFailure::CreatesEnergy { regimes, .. }
+            | StepFailure::OutOfBalance { regimes, .. }
+            | StepFailure::IterationLimit { regimes, .. } => Some(regimes),
+            _ => None,
+        }
+    }
 }

@@ -32,7 +32,9 @@ pub(crate) struct Attempt {
     pub(crate) force_only: bool,
     /// Of a failed attempt, or one that ended on its best iterate: the
     /// tets whose damage switched between growing and not at least twice
-    /// between iterates (the points Newton could not settle).
+    /// between iterates (the points Newton could not settle). Tets whose
+    /// history the iterates defer (IMPL-EX) are not among them: their
+    /// damage does not enter the iterates.
     pub(crate) flipping: Vec<usize>,
     /// Likewise the interface points whose regime switched at least twice:
     /// damage growing or not, sliding or sticking, or their slip in the
@@ -224,6 +226,29 @@ impl Workspace<'_> {
     /// `trial`, `f_int` and the control's λ hold the last (or the
     /// accepted) iterate.
     pub(crate) fn newton(
+        &mut self,
+        start: &States,
+        u: &mut [f64],
+        step_size: f64,
+        control: &mut Control<'_>,
+    ) -> Attempt {
+        let mut attempt = self.iterate(start, u, step_size, control);
+        // The iterates deferred the history of the IMPL-EX tets; the last
+        // one's trial states are the attempt's answer.
+        if let Err(e) = self.update_history(start, u) {
+            if attempt.failure.is_none() {
+                attempt.failure = Some(constitutive(false)(e));
+            }
+        }
+        if let Some(regimes) = attempt.failure.as_mut().and_then(StepFailure::regimes_mut) {
+            *regimes = RegimeChanges::between(start, &self.trial);
+        }
+        attempt
+    }
+
+    /// [`Workspace::newton`]'s iterations; the trial states of the tets
+    /// whose history is deferred stay as they were.
+    fn iterate(
         &mut self,
         start: &States,
         u: &mut [f64],

@@ -2127,7 +2127,7 @@ fn implicit_residual(
         scratch,
         &mut ws.trial,
         Tangents::all(TangentKind::Secant),
-        Outputs::forces(&mut ws.f_int),
+        Outputs::forces_of_stresses(&mut ws.f_int),
     )?;
     let mut r = vec![0.0; system.dofs().n_free()];
     residual(system.dofs(), &ws.f_int, &mut r);

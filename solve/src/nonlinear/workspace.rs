@@ -5,7 +5,7 @@
 use super::summary::WallTimes;
 use crate::assembly::{
     AssemblyError, DofMap, ElementLaws, KeptBulkMatrix, LoadDerivatives, Outputs, States, System,
-    Tangents,
+    Tangents, TetHistory,
 };
 use crate::linalg::amg::{AmgError, AmgParams};
 use crate::linalg::multigrid::{FreeDofMultigrid, NodeBlockLayout};
@@ -51,7 +51,9 @@ pub(crate) struct Workspace<'a> {
 
 impl Workspace<'_> {
     /// Evaluates the iterate `u` from `start` with the tangent kinds
-    /// `tangents` into `trial`, `f_int` and the tangent values.
+    /// `tangents` into `trial`, `f_int` and the tangent values; the trial
+    /// states whose update is deferrable are completed by
+    /// [`Workspace::update_history`].
     pub(crate) fn evaluate(
         &mut self,
         start: &States,
@@ -71,10 +73,24 @@ impl Workspace<'_> {
                 upper,
                 load: self.load.as_mut(),
                 kept_bulk: Some(&mut self.kept_bulk),
-                stress_only: false,
+                history: TetHistory::Deferred,
             },
         )?;
         self.wall.add_eval(&t);
+        Ok(())
+    }
+
+    /// Completes the trial states the iterates' evaluations deferred (see
+    /// [`TetHistory::Deferred`]) at the iterate `u`.
+    pub(crate) fn update_history(
+        &mut self,
+        start: &States,
+        u: &[f64],
+    ) -> Result<(), AssemblyError> {
+        let spent = self
+            .system
+            .update_history(self.laws, u, start, &mut self.trial)?;
+        self.wall.constitutive += spent;
         Ok(())
     }
 
