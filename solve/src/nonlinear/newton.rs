@@ -608,8 +608,15 @@ pub(crate) fn forcing_term(
                 }
                 e
             };
-            let _ = scale;
             eta.min(ETA_MAX).max(floor)
+        }
+        Forcing::Tolerance => {
+            let aim = 0.5 * settings.residual_tolerance * scale / rnorm;
+            if aim.is_finite() {
+                aim.min(ETA_MAX).max(floor)
+            } else {
+                floor
+            }
         }
     }
 }
@@ -640,5 +647,25 @@ mod tests {
             ..ew
         };
         assert_eq!(forcing_term(&fixed, 3, 0.5, 1.0, 0.1, 1.0), 1e-3);
+    }
+
+    /// `tolerance` forcing aims each correction at half the force
+    /// criterion (tol_r · scale / ‖r‖ / 2) within [`krylov_tolerance`, 0.1],
+    /// whatever the previous corrections did.
+    #[test]
+    fn forcing_term_aims_at_the_force_criterion() {
+        let aim = SolverSettings {
+            forcing: Forcing::Tolerance,
+            residual_tolerance: 1e-4,
+            ..SolverSettings::default()
+        };
+        let f = |k, r, scale| forcing_term(&aim, k, r, 1.0, 0.1, scale);
+        // ‖r‖ = 7e-3 of a 2 kN reaction: 0.5e-4 / 7e-3.
+        assert!((f(0, 14.0, 2e3) - 0.5e-4 / 7e-3).abs() < 1e-15);
+        assert_eq!(f(1, 14.0, 2e3), f(0, 14.0, 2e3));
+        // Near the criterion at most 0.1, far from it at least 1e-3.
+        assert_eq!(f(1, 1.2e-4, 1.0), 0.1);
+        assert_eq!(f(0, 1.0, 1.0), aim.krylov_tolerance);
+        assert_eq!(f(0, 0.0, 1.0), aim.krylov_tolerance);
     }
 }

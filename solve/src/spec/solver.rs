@@ -261,6 +261,13 @@ pub enum Forcing {
     /// solves far from the solution, tight ones near it.
     #[default]
     EisenstatWalker,
+    /// η_k = ½ `residual_tolerance` · (force scale) / ‖r_k‖, clipped to
+    /// [`krylov_tolerance`, 0.1]: each correction aims at the force
+    /// criterion itself. For steps that are nearly linear (IMPL-EX
+    /// concrete), where Eisenstat–Walker's loose first correction costs a
+    /// second correction and its tight second one oversolves; a strongly
+    /// nonlinear step would oversolve its first correction instead.
+    Tolerance,
 }
 
 /// Floating-point precision of the kept Cholesky factor when it is applied
