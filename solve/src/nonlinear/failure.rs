@@ -165,10 +165,11 @@ pub enum StepFailure {
     },
 }
 
-impl StepFailure {
-    /// The regime changes of the last iterate, where the failure records them.
-    pub fn regimes(&self) -> Option<&RegimeChanges> {
-        match self {
+/// The regime changes a failure records, by reference or by mutable
+/// reference alike.
+macro_rules! recorded_regimes {
+    ($failure:expr) => {
+        match $failure {
             StepFailure::Stagnating { regimes, .. }
             | StepFailure::Diverging { regimes, .. }
             | StepFailure::LinearSolve { regimes, .. }
@@ -178,19 +179,17 @@ impl StepFailure {
             | StepFailure::IterationLimit { regimes, .. } => Some(regimes),
             _ => None,
         }
+    };
+}
+
+impl StepFailure {
+    /// The regime changes of the last iterate, where the failure records them.
+    pub fn regimes(&self) -> Option<&RegimeChanges> {
+        recorded_regimes!(self)
     }
 
     /// [`StepFailure::regimes`], to be recounted.
     pub(crate) fn regimes_mut(&mut self) -> Option<&mut RegimeChanges> {
-        match self {
-            StepFailure::Stagnating { regimes, .. }
-            | StepFailure::Diverging { regimes, .. }
-            | StepFailure::LinearSolve { regimes, .. }
-            | StepFailure::Unsettled { regimes, .. }
-            | StepFailure::CreatesEnergy { regimes, .. }
-            | StepFailure::OutOfBalance { regimes, .. }
-            | StepFailure::IterationLimit { regimes, .. } => Some(regimes),
-            _ => None,
-        }
+        recorded_regimes!(self)
     }
 }
