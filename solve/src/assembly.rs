@@ -820,8 +820,8 @@ impl System {
         Ok(t.elapsed().as_secs_f64())
     }
 
-    /// The strain of tet `index` at the displacement `u`.
-    fn tet_strain(&self, index: usize, u: &[f64]) -> Vector6<f64> {
+    /// The strain of tet `index` at the displacement `u` (global, m).
+    pub fn tet_strain(&self, index: usize, u: &[f64]) -> Vector6<f64> {
         let d = tet_dofs(&self.tets[index]);
         self.tet_geom[index].strain(&std::array::from_fn(|i| u[d[i]]))
     }

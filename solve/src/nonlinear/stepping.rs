@@ -1040,19 +1040,12 @@ impl<'a> Driver<'a> {
             return Ok(());
         };
         let t = Instant::now();
-        let tets = &self.problem.model.tets;
-        let geometry = self.ws.system.tet_geometry();
+        let system: &System = self.ws.system;
         let measures: Vec<(f64, f64)> = operator
             .tets()
             .par_iter()
             .zip(laws)
-            .map(|(&i, law)| {
-                let mut ue = [0.0; 12];
-                for (a, &n) in tets[i].iter().enumerate() {
-                    ue[3 * a..3 * a + 3].copy_from_slice(&u[3 * n as usize..3 * n as usize + 3]);
-                }
-                law.local_measures(&geometry[i].strain(&ue))
-            })
+            .map(|(&i, law)| law.local_measures(&system.tet_strain(i, u)))
             .collect();
         let local: Vec<f64> = measures.iter().map(|m| m.0).collect();
         let averaged = operator.average(&local)?;
