@@ -26,8 +26,8 @@ use crate::laws::{AnyBulkLaw, BulkLaw, HeldHistory, InterfaceLaw, TangentKind};
 use crate::linalg::norm;
 use crate::nonlocal::{self, GradientAveraging};
 use crate::spec::solver::{
-    ConcreteIntegration, InterfaceHolds, InterfaceIntegration, LinearSolverKind, Loading,
-    PathFollowing, Predictor, SolverSettings,
+    ConcreteIntegration, CurveError, InterfaceHolds, InterfaceIntegration, LinearSolverKind,
+    Loading, PathFollowing, Predictor, SolverSettings,
 };
 use mesh::Model;
 use rayon::prelude::*;
@@ -1217,11 +1217,11 @@ impl<'a> Driver<'a> {
     /// controlled step ends at `u`: the distance of that point from the
     /// chord between the one before it (or the origin) and the new one,
     /// on axes scaled to the FED's range and to the largest |σ_mb| so far
-    /// (`loading.curve_tolerance`), and the step size that would bring it
-    /// to the tolerance. The distance grows with the product of the two
-    /// steps' lengths, whence the geometric mean in the next size. `None`
-    /// when the control is off, under path-following or before the first
-    /// step.
+    /// (`loading.curve_tolerance`; see [`chord_deviation`]), and the step
+    /// size that would bring it to the tolerance. The distance grows with
+    /// the product of the two steps' lengths, whence the geometric mean in
+    /// the next size. `None` when the control is off, under path-following
+    /// or before the first step.
     fn curve_bend(
         &self,
         path: &Path,
@@ -1248,7 +1248,8 @@ impl<'a> Driver<'a> {
             return None;
         }
         let scaled = |fed: f64, bond: f64| [fed / fed_range, bond / stress_range];
-        let deviation = distance_to_segment(
+        let deviation = chord_deviation(
+            loading.curve_error,
             scaled(last.fed, last.bond_stress),
             before.map_or([0.0, 0.0], |r| scaled(r.fed, r.bond_stress)),
             scaled(fed, bond),
@@ -2139,6 +2140,23 @@ fn peak_resident_mib() -> Option<f64> {
 
 /// Distance of `p` from the segment from `a` to `b` (a point when they
 /// coincide).
+/// How far `p` lies from the chord `a`–`b` (scaled axes: FED, σ_mb), as
+/// `measure` asks. `Stress` takes, where the FED grows through the three
+/// points, the σ_mb distance at `p`'s FED: the error a curve read along
+/// FED gets from the chord there. On r1-coarse's steep rise to the
+/// adhesion peak (scaled slope 10–20) the shortest distance is that many
+/// times smaller, and that rise carried most of its curve error
+/// (docs/solver.md, "Resolving the curve"). Elsewhere (a snap-back, a FED
+/// at a standstill) both take the shortest distance.
+fn chord_deviation(measure: CurveError, p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
+    if measure == CurveError::Stress && a[0] < p[0] && p[0] < b[0] {
+        let t = (p[0] - a[0]) / (b[0] - a[0]);
+        (p[1] - (a[1] + t * (b[1] - a[1]))).abs()
+    } else {
+        distance_to_segment(p, a, b)
+    }
+}
+
 fn distance_to_segment(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
     let (ab, ap) = ([b[0] - a[0], b[1] - a[1]], [p[0] - a[0], p[1] - a[1]]);
     let length2 = ab[0] * ab[0] + ab[1] * ab[1];

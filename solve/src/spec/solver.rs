@@ -44,6 +44,7 @@ pub struct RawLoading {
     pub easy_iterations: Option<usize>,
     pub max_steps: Option<usize>,
     pub curve_tolerance: Option<f64>,
+    pub curve_error: Option<CurveError>,
 }
 
 /// Displacement-controlled loading, SI.
@@ -81,6 +82,31 @@ pub struct Loading {
     /// existed reads as 0.
     #[serde(default)]
     pub curve_tolerance: f64,
+    /// What `curve_tolerance` bounds. Left out of the serialised form when
+    /// it is the default, so that specs without it keep their cache keys.
+    #[serde(default, skip_serializing_if = "CurveError::is_distance")]
+    pub curve_error: CurveError,
+}
+
+/// What `loading.curve_tolerance` bounds (docs/solver.md, "Resolving the
+/// curve").
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum CurveError {
+    /// The shortest distance of a curve point from its neighbours' chord.
+    #[default]
+    Distance,
+    /// Where the FED grows, the σ_mb distance of the point from the chord
+    /// at its FED: the error of σ_mb read along FED, which on a steep rise
+    /// or drop is many times the shortest distance. Elsewhere as
+    /// `Distance`.
+    Stress,
+}
+
+impl CurveError {
+    fn is_distance(&self) -> bool {
+        *self == CurveError::Distance
+    }
 }
 
 /// `loading.curve_tolerance` unless a scene sets it (docs/solver.md,
@@ -100,6 +126,7 @@ impl Default for Loading {
             easy_iterations: 5,
             max_steps: None,
             curve_tolerance: DEFAULT_CURVE_TOLERANCE,
+            curve_error: CurveError::Distance,
         }
     }
 }
@@ -143,6 +170,7 @@ impl RawLoading {
             easy_iterations: self.easy_iterations.unwrap_or(d.easy_iterations),
             max_steps: self.max_steps,
             curve_tolerance: self.curve_tolerance.unwrap_or(d.curve_tolerance),
+            curve_error: self.curve_error.unwrap_or(d.curve_error),
         };
         let bad = |key: &str, value: f64, bound| {
             Err(SolverSpecError::OutOfRange {
