@@ -2138,8 +2138,6 @@ fn peak_resident_mib() -> Option<f64> {
     Some(kib / 1024.0)
 }
 
-/// Distance of `p` from the segment from `a` to `b` (a point when they
-/// coincide).
 /// How far `p` lies from the chord `a`–`b` (scaled axes: FED, σ_mb), as
 /// `measure` asks. `Stress` takes, where the FED grows through the three
 /// points, the σ_mb distance at `p`'s FED: the error a curve read along
@@ -2157,6 +2155,8 @@ fn chord_deviation(measure: CurveError, p: [f64; 2], a: [f64; 2], b: [f64; 2]) -
     }
 }
 
+/// Distance of `p` from the segment from `a` to `b` (a point when they
+/// coincide).
 fn distance_to_segment(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
     let (ab, ap) = ([b[0] - a[0], b[1] - a[1]], [p[0] - a[0], p[1] - a[1]]);
     let length2 = ab[0] * ab[0] + ab[1] * ab[1];
