@@ -2438,6 +2438,19 @@ fn distance_along(test: &[CurveRow], reference: &[CurveRow], x: fn(&CurveRow) ->
     (difference / norm).sqrt()
 }
 
+/// The curve-control tests' loading of the synthetic pull-out: to 0.4 mm,
+/// the first step a tenth of the largest.
+fn slab_curve_loading(max_step: f64, curve_tolerance: f64, curve_error: CurveError) -> Loading {
+    Loading {
+        u_final: 4e-4,
+        initial_step: max_step / 10.0,
+        max_step,
+        curve_tolerance,
+        curve_error,
+        ..Loading::default()
+    }
+}
+
 /// `loading.curve_error: stress` bounds the error of σ_mb read along FED,
 /// which the chord's shortest distance understates where the curve is
 /// steep: on the synthetic pull-out, at the same tolerance, its curve
@@ -2448,14 +2461,7 @@ fn distance_along(test: &[CurveRow], reference: &[CurveRow], x: fn(&CurveRow) ->
 fn stress_measure_bounds_the_error_along_fed() {
     let m = slab_pullout(8);
     let laws = pullout_laws(&m);
-    let loading = |max_step: f64, curve_tolerance: f64, curve_error| Loading {
-        u_final: 4e-4,
-        initial_step: max_step / 10.0,
-        max_step,
-        curve_tolerance,
-        curve_error,
-        ..Loading::default()
-    };
+    let loading = slab_curve_loading;
     let settings = SolverSettings::default();
     let run = |loading: Loading| {
         solve_pullout(&m, &laws, &loading, &settings, None, &mut Silent).unwrap()
@@ -2485,13 +2491,8 @@ fn stress_measure_bounds_the_error_along_fed() {
 fn curve_tolerance_resolves_the_adhesion_peak() {
     let m = slab_pullout(8);
     let laws = pullout_laws(&m);
-    let loading = |max_step: f64, curve_tolerance: f64| Loading {
-        u_final: 4e-4,
-        initial_step: max_step / 10.0,
-        max_step,
-        curve_tolerance,
-        ..Loading::default()
-    };
+    let loading =
+        |max_step, tolerance| slab_curve_loading(max_step, tolerance, CurveError::Distance);
     let settings = SolverSettings::default();
     let run = |loading: Loading| {
         solve_pullout(&m, &laws, &loading, &settings, None, &mut Silent).unwrap()
