@@ -821,7 +821,7 @@ impl System {
     }
 
     /// The strain of tet `index` at the displacement `u` (global, m).
-    pub fn tet_strain(&self, index: usize, u: &[f64]) -> Vector6<f64> {
+    pub(crate) fn tet_strain(&self, index: usize, u: &[f64]) -> Vector6<f64> {
         let d = tet_dofs(&self.tets[index]);
         self.tet_geom[index].strain(&std::array::from_fn(|i| u[d[i]]))
     }
