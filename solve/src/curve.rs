@@ -1,6 +1,7 @@
 //! The pull-out curve and its file, `curve.csv`: one row per converged
 //! step, with the energy balance's columns after the curve's when the run
-//! tracked it. The column names live here only; files are written with
+//! tracked it, and the IMPL-EX error of each step after those when the run
+//! integrated any point explicitly. The column names live here only; files are written with
 //! them and read back by name, so columns may be reordered or added.
 
 use crate::energy::EnergyRow;
@@ -22,6 +23,10 @@ pub struct CurveRow {
     pub bond_stress: f64,
     /// Newton iterations of the converged attempt.
     pub iterations: usize,
+    /// The step's IMPL-EX error indicator (relative residual of its state
+    /// under the implicit history, the quantity `solver.impl_ex_tolerance`
+    /// bounds); `None` in a run without explicitly integrated points.
+    pub impl_ex_error: Option<f64>,
 }
 
 impl CurveRow {
@@ -41,6 +46,7 @@ impl CurveRow {
             fed,
             bond_stress,
             iterations,
+            impl_ex_error: None,
         }
     }
 }
@@ -58,13 +64,22 @@ pub const CURVE_COLUMNS: [&str; 6] = [
 /// The energy balance's columns (J, whole specimen), after the curve's.
 pub const ENERGY_COLUMNS: [&str; 4] = ["w_ext", "w_int", "stored", "dissipated"];
 
+/// The column of each step's IMPL-EX error, last, written when every row
+/// has one.
+pub const IMPL_EX_ERROR_COLUMN: &str = "impl_ex_error";
+
 /// The text of `curve.csv`; with `energy` (one row per curve row) the
-/// energy columns follow. Reals in shortest round-trip scientific notation.
+/// energy columns follow, then the IMPL-EX error when every row has one.
+/// Reals in shortest round-trip scientific notation.
 pub fn write_curve_csv(rows: &[CurveRow], energy: Option<&[EnergyRow]>) -> String {
     let energy = energy.filter(|e| e.len() == rows.len());
+    let impl_ex = !rows.is_empty() && rows.iter().all(|r| r.impl_ex_error.is_some());
     let mut header: Vec<&str> = CURVE_COLUMNS.to_vec();
     if energy.is_some() {
         header.extend(ENERGY_COLUMNS);
+    }
+    if impl_ex {
+        header.push(IMPL_EX_ERROR_COLUMN);
     }
     let mut out = header.join(",");
     out.push('\n');
@@ -81,6 +96,9 @@ pub fn write_curve_csv(rows: &[CurveRow], energy: Option<&[EnergyRow]>) -> Strin
                 ",{:e},{:e},{:e},{:e}",
                 e.w_ext, e.w_int, e.stored, e.dissipated
             );
+        }
+        if let (true, Some(e)) = (impl_ex, r.impl_ex_error) {
+            let _ = write!(out, ",{e:e}");
         }
         out.push('\n');
     }
@@ -137,6 +155,8 @@ pub fn parse_curve_csv(text: &str) -> Result<Vec<CurveRow>, CurveCsvError> {
         })?;
     }
 
+    let impl_ex = names.iter().position(|n| *n == IMPL_EX_ERROR_COLUMN);
+
     let mut rows = Vec::new();
     for (line, content) in lines {
         let fields: Vec<&str> = content.split(',').map(str::trim).collect();
@@ -164,6 +184,20 @@ pub fn parse_curve_csv(text: &str) -> Result<Vec<CurveRow>, CurveCsvError> {
                 _ => Err(bad(k, "a finite number")),
             }
         };
+        let impl_ex_error = match impl_ex {
+            None => None,
+            Some(k) => match fields[k].parse::<f64>() {
+                Ok(x) if x.is_finite() => Some(x),
+                _ => {
+                    return Err(CurveCsvError::BadValue {
+                        line,
+                        column: IMPL_EX_ERROR_COLUMN,
+                        value: fields[k].to_string(),
+                        kind: "a finite number",
+                    })
+                }
+            },
+        };
         rows.push(CurveRow {
             step: int(0)?,
             u_imposed: real(1)?,
@@ -171,6 +205,7 @@ pub fn parse_curve_csv(text: &str) -> Result<Vec<CurveRow>, CurveCsvError> {
             fed: real(3)?,
             bond_stress: real(4)?,
             iterations: int(5)?,
+            impl_ex_error,
         });
     }
     if rows.is_empty() {
@@ -183,18 +218,46 @@ pub fn parse_curve_csv(text: &str) -> Result<Vec<CurveRow>, CurveCsvError> {
 mod tests {
     use super::*;
 
-    /// What is written is read back exactly, with or without energies.
+    /// What is written is read back exactly, with or without energies and
+    /// IMPL-EX errors.
     #[test]
     fn written_curve_reads_back() {
-        let rows = vec![
+        let implicit = vec![
             CurveRow::new(1, 1e-5, 120.5, 2.5e-6, 1.25e6, 4),
             CurveRow::new(2, 2.000000000000001e-5, 240.25, 5e-6, 2.5e6, 5),
         ];
+        let mut explicit = implicit.clone();
+        explicit[0].impl_ex_error = Some(3.25e-3);
+        explicit[1].impl_ex_error = Some(0.0);
         let energy = vec![EnergyRow::default(); 2];
-        for e in [None, Some(energy.as_slice())] {
-            let text = write_curve_csv(&rows, e);
-            assert_eq!(parse_curve_csv(&text).unwrap(), rows, "{text}");
-            assert_eq!(text.lines().next().unwrap().contains("w_ext"), e.is_some());
+        for rows in [implicit, explicit] {
+            for e in [None, Some(energy.as_slice())] {
+                let text = write_curve_csv(&rows, e);
+                assert_eq!(parse_curve_csv(&text).unwrap(), rows, "{text}");
+                let header = text.lines().next().unwrap();
+                assert_eq!(header.contains("w_ext"), e.is_some());
+                assert_eq!(
+                    header.ends_with(IMPL_EX_ERROR_COLUMN),
+                    rows[0].impl_ex_error.is_some()
+                );
+            }
         }
+    }
+
+    /// A row without an IMPL-EX error leaves the column out rather than
+    /// writing a value that is not there; a bad value is named.
+    #[test]
+    fn impl_ex_column_only_when_every_row_has_one() {
+        let mut rows = vec![CurveRow::new(1, 1e-5, 1.0, 1e-6, 1e6, 1); 2];
+        rows[0].impl_ex_error = Some(1e-2);
+        assert!(!write_curve_csv(&rows, None).contains(IMPL_EX_ERROR_COLUMN));
+        let text = "step,u_imposed,force,fed,bond_stress,iterations,impl_ex_error\n1,0,0,0,0,1,x\n";
+        assert!(matches!(
+            parse_curve_csv(text),
+            Err(CurveCsvError::BadValue {
+                column: IMPL_EX_ERROR_COLUMN,
+                ..
+            })
+        ));
     }
 }

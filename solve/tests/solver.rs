@@ -2092,6 +2092,48 @@ fn prism_work(nz: usize, nonlocal_length: Option<f64>) -> (f64, Vec<f64>) {
     (work, damage)
 }
 
+/// Each step of an IMPL-EX run carries its error indicator in the curve,
+/// the largest of them the summary's; the step control shrinks a step
+/// whose error passes the tolerance, but not below `loading.min_step`,
+/// where it keeps the step with its error recorded.
+#[test]
+fn impl_ex_error_is_recorded_per_step_and_floored_steps_keep_theirs() {
+    let free = Loading {
+        u_final: 20e-6,
+        initial_step: 1e-6,
+        max_step: 2e-6,
+        ..Loading::default()
+    };
+    let floored = Loading {
+        min_step: 1e-6,
+        ..free
+    };
+    let tolerance = SolverSettings::default().impl_ex_tolerance;
+    let mut shortest = Vec::new();
+    for loading in [&free, &floored] {
+        let r = run_prism((20, None), loading, None, &mut Silent);
+        let errors: Vec<f64> = r
+            .rows
+            .iter()
+            .map(|row| row.impl_ex_error.expect("an IMPL-EX step's error"))
+            .collect();
+        let largest = errors.iter().copied().fold(0.0, f64::max);
+        assert!(largest > tolerance, "{errors:?}");
+        assert!(largest <= r.summary.impl_ex_max_residual, "{errors:?}");
+        let mut before = 0.0;
+        let mut steps = Vec::new();
+        for row in &r.rows {
+            steps.push(row.u_imposed - before);
+            before = row.u_imposed;
+        }
+        let h_min = steps.iter().copied().fold(f64::INFINITY, f64::min);
+        assert!(h_min >= loading.min_step * (1.0 - 1e-9), "{steps:?}");
+        shortest.push(h_min);
+    }
+    // Without the floor the control goes below it.
+    assert!(shortest[0] < floored.min_step, "{shortest:?}");
+}
+
 /// The softening zone of a gradient-enhanced damage has a width of its
 /// own: a prism in tension dissipates the same on 0.5, 0.25 and 0.125 mm
 /// cells (within 2.5 %), where the local law with the same softening

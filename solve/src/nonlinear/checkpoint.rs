@@ -86,7 +86,7 @@ pub enum CheckpointError {
     Corrupt { path: String, detail: String },
 }
 
-const CHECKPOINT_MAGIC: u64 = 0x7269_6262_6172_000a;
+const CHECKPOINT_MAGIC: u64 = 0x7269_6262_6172_000b;
 
 impl Checkpoint {
     /// Writes atomically (temporary file then rename), bincode.

@@ -920,6 +920,7 @@ impl<'a> Driver<'a> {
             fed,
             bond_stress: bond,
             iterations: attempt.iterations,
+            impl_ex_error: review.impl_ex_residual,
         };
         path.rows.push(row);
         let summary = &mut path.summary;
