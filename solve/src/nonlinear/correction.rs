@@ -155,7 +155,7 @@ impl Workspace<'_> {
         let out = (|| {
             if self.lin.kept.is_ready()
                 && !self.lin.refactor
-                && self.try_gmres(a, border, rhs, du, eta)
+                && self.try_gmres(a, border, rhs, du, eta).is_ok()
             {
                 return Ok(());
             }
@@ -165,7 +165,7 @@ impl Workspace<'_> {
             self.lin.preconditioner = pvals;
             res?;
             self.lin.refactor = false;
-            if self.try_gmres(a, border, rhs, du, eta) {
+            if self.try_gmres(a, border, rhs, du, eta).is_ok() {
                 return Ok(());
             }
             self.lin.refactor = true;
@@ -179,7 +179,7 @@ impl Workspace<'_> {
         out
     }
 
-    /// One GMRES solve with the kept factor; whether it converged.
+    /// One GMRES solve with the kept factor; why it did not converge.
     fn try_gmres(
         &mut self,
         a: SplitMatrix<'_>,
@@ -187,7 +187,7 @@ impl Workspace<'_> {
         rhs: &[f64],
         du: &mut [f64],
         eta: f64,
-    ) -> bool {
+    ) -> Result<(), LinearError> {
         let max = self.settings.krylov_max_iterations;
         let t = Instant::now();
         let res = match border {
@@ -200,13 +200,14 @@ impl Workspace<'_> {
             Ok(info) => {
                 self.lin.krylov_iterations += info.iterations;
                 self.lin.refactor = info.iterations > max / 2;
-                true
+                Ok(())
             }
-            Err(LinearError::KrylovNotConverged { iterations, .. }) => {
-                self.lin.krylov_iterations += iterations;
-                false
+            Err(e) => {
+                if let LinearError::KrylovNotConverged { iterations, .. } = e {
+                    self.lin.krylov_iterations += iterations;
+                }
+                Err(e)
             }
-            Err(_) => false,
         }
     }
 
@@ -230,7 +231,7 @@ impl Workspace<'_> {
             .and_then(|()| self.factorize(&values));
         self.lin.preconditioner = values;
         res?;
-        if self.try_gmres(a, border, rhs, du, eta) {
+        if self.try_gmres(a, border, rhs, du, eta).is_ok() {
             return Ok(());
         }
         let values = std::mem::take(&mut self.lin.preconditioner);
@@ -240,17 +241,10 @@ impl Workspace<'_> {
             lower: &values,
             upper: &values,
         };
-        let ok = self.try_gmres(secant, border, rhs, du, eta);
+        // The secant system's own error: what the last fallback reached.
+        let res = self.try_gmres(secant, border, rhs, du, eta);
         self.lin.preconditioner = values;
-        if ok {
-            Ok(())
-        } else {
-            Err(LinearError::KrylovNotConverged {
-                iterations: self.settings.krylov_max_iterations,
-                tolerance: eta,
-                reached: f64::NAN,
-            })
-        }
+        res
     }
 
     /// The secant matrix of the iterate `u` (from `start`) into `values`
