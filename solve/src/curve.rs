@@ -1,8 +1,9 @@
 //! The pull-out curve and its file, `curve.csv`: one row per converged
 //! step, with the energy balance's columns after the curve's when the run
-//! tracked it, and the IMPL-EX error of each step after those when the run
-//! integrated any point explicitly. The column names live here only; files are written with
-//! them and read back by name, so columns may be reordered or added.
+//! tracked it, and the IMPL-EX error of each step after those when every
+//! step integrated points explicitly. The column names live here only;
+//! files are written with them and read back by name, so columns may be
+//! reordered or added.
 
 use crate::energy::EnergyRow;
 use serde::{Deserialize, Serialize};
