@@ -168,37 +168,27 @@ pub fn parse_curve_csv(text: &str) -> Result<Vec<CurveRow>, CurveCsvError> {
                 found: fields.len(),
             });
         }
-        let bad = |k: usize, kind| CurveCsvError::BadValue {
+        let bad = |column, at: usize, kind| CurveCsvError::BadValue {
             line,
-            column: CURVE_COLUMNS[k],
-            value: fields[index[k]].to_string(),
+            column,
+            value: fields[at].to_string(),
             kind,
         };
         let int = |k: usize| -> Result<usize, CurveCsvError> {
             fields[index[k]]
                 .parse::<usize>()
-                .map_err(|_| bad(k, "a non-negative integer"))
+                .map_err(|_| bad(CURVE_COLUMNS[k], index[k], "a non-negative integer"))
         };
-        let real = |k: usize| -> Result<f64, CurveCsvError> {
-            match fields[index[k]].parse::<f64>() {
+        let finite = |column, at: usize| -> Result<f64, CurveCsvError> {
+            match fields[at].parse::<f64>() {
                 Ok(x) if x.is_finite() => Ok(x),
-                _ => Err(bad(k, "a finite number")),
+                _ => Err(bad(column, at, "a finite number")),
             }
         };
-        let impl_ex_error = match impl_ex {
-            None => None,
-            Some(k) => match fields[k].parse::<f64>() {
-                Ok(x) if x.is_finite() => Some(x),
-                _ => {
-                    return Err(CurveCsvError::BadValue {
-                        line,
-                        column: IMPL_EX_ERROR_COLUMN,
-                        value: fields[k].to_string(),
-                        kind: "a finite number",
-                    })
-                }
-            },
-        };
+        let real = |k: usize| finite(CURVE_COLUMNS[k], index[k]);
+        let impl_ex_error = impl_ex
+            .map(|at| finite(IMPL_EX_ERROR_COLUMN, at))
+            .transpose()?;
         rows.push(CurveRow {
             step: int(0)?,
             u_imposed: real(1)?,
