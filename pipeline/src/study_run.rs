@@ -47,6 +47,24 @@ fn run_child(exe: &Path, args: &[String], log: &Path) -> Result<bool> {
     Ok(status.success())
 }
 
+/// The error a case's child reported last (the CLI ends a failed command
+/// with `error: …`), so that a refused case says why in the study's own
+/// output instead of only naming its log.
+fn child_error(log: &Path) -> Option<String> {
+    let text = std::fs::read_to_string(log).ok()?;
+    let lines: Vec<&str> = text.lines().collect();
+    let at = lines.iter().rposition(|l| l.starts_with("error: "))?;
+    let mut why = lines[at]["error: ".len()..].to_owned();
+    for cause in lines[at + 1..]
+        .iter()
+        .map_while(|l| l.strip_prefix("  caused by: "))
+    {
+        why.push_str(": ");
+        why.push_str(cause);
+    }
+    Some(why)
+}
+
 /// Nodes of a case's mesh, from its published mesh.json.
 fn case_dofs(work: &Path, case: &Case) -> Option<f64> {
     let text = std::fs::read(work.join(&case.name).join("mesh.json")).ok()?;
@@ -118,10 +136,14 @@ pub fn run(args: &StudyArgs, printer: &Printer) -> Result<ExitCode> {
 
     let failed = Mutex::new(Vec::<(String, String)>::new());
     let fail = |case: &Case, stage: &str, log: &Path| {
-        failed.lock().unwrap_or_else(|e| e.into_inner()).push((
-            case.name.clone(),
-            format!("{stage} failed, see {}", log.display()),
-        ));
+        let why = match child_error(log) {
+            Some(e) => format!("{stage} failed: {e} (log {})", log.display()),
+            None => format!("{stage} failed, see {}", log.display()),
+        };
+        failed
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .push((case.name.clone(), why));
     };
     // Meshes first: gmsh's memory is small, and the mesh sizes tell the
     // solves' memory.

@@ -163,3 +163,46 @@ fn snakemake_export_runs() {
     assert_eq!(table.lines().count(), 3, "{table}");
     std::fs::remove_dir_all(&work).unwrap();
 }
+
+/// A case the spec checks refuse fails alone: the study names the case and
+/// the refusal itself (not only the log that holds it), exits non-zero, and
+/// the other case's results are published.
+#[test]
+fn a_refused_case_says_why_and_the_others_are_kept() {
+    let work = work_dir("refused");
+    std::fs::create_dir_all(&work).unwrap();
+    let study = work.join("refused.yaml");
+    let base = repo().join("tests/data/tiny-smooth.yaml");
+    std::fs::write(
+        &study,
+        format!(
+            "name: refused\nbase: {}\nparameters:\n  materials.interface.mu: [0.3, -0.5]\n",
+            base.display()
+        ),
+    )
+    .unwrap();
+    let o = ribbar()
+        .args(["study", study.to_str().unwrap(), "--work"])
+        .arg(&work)
+        .current_dir(repo())
+        .stdin(Stdio::null())
+        .output()
+        .expect("command runs");
+    let text = format!(
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(!o.status.success(), "{text}");
+    let line = text
+        .lines()
+        .find(|l| l.starts_with("[refused--1]") && l.contains("failed"))
+        .unwrap_or_else(|| panic!("no failure line for the refused case:\n{text}"));
+    assert!(
+        line.contains("materials.interface.mu") && line.contains("refused--1.mesh.log"),
+        "{line}"
+    );
+    assert!(text.contains("1 of 2 cases failed"), "{text}");
+    assert!(work.join("refused--0/summary.json").is_file(), "{text}");
+    std::fs::remove_dir_all(&work).unwrap();
+}
