@@ -18,7 +18,8 @@ fn work_dir(name: &str) -> PathBuf {
     dir
 }
 
-fn ok(cmd: &mut Command) -> String {
+/// Runs `cmd` in the repository; its status and its stdout and stderr as one text.
+fn output(cmd: &mut Command) -> (Output, String) {
     let o: Output = cmd
         .current_dir(repo())
         .stdin(Stdio::null())
@@ -29,6 +30,11 @@ fn ok(cmd: &mut Command) -> String {
         String::from_utf8_lossy(&o.stdout),
         String::from_utf8_lossy(&o.stderr)
     );
+    (o, t)
+}
+
+fn ok(cmd: &mut Command) -> String {
+    let (o, t) = output(cmd);
     assert!(o.status.success(), "{cmd:?} failed:\n{t}");
     t
 }
@@ -181,17 +187,10 @@ fn a_refused_case_says_why_and_the_others_are_kept() {
         ),
     )
     .unwrap();
-    let o = ribbar()
-        .args(["study", study.to_str().unwrap(), "--work"])
-        .arg(&work)
-        .current_dir(repo())
-        .stdin(Stdio::null())
-        .output()
-        .expect("command runs");
-    let text = format!(
-        "{}{}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
+    let (o, text) = output(
+        ribbar()
+            .args(["study", study.to_str().unwrap(), "--work"])
+            .arg(&work),
     );
     assert!(!o.status.success(), "{text}");
     let line = text
