@@ -2,6 +2,7 @@
 //! package's entry point both run it. Library crates return typed errors;
 //! here they are reported with their chain and a non-zero exit.
 
+use crate::child::{CAUSE_PREFIX, ERROR_PREFIX};
 use crate::cli::{Cli, Command, SceneArgs};
 use crate::progress::{Printer, Verbosity};
 use crate::scene::Scene;
@@ -17,14 +18,14 @@ use std::process::ExitCode;
 /// then one `  caused by: ` line per cause that the message above it does
 /// not already end with.
 pub fn error_report(err: &anyhow::Error) -> String {
-    let mut text = format!("error: {err}");
+    let mut text = format!("{ERROR_PREFIX}{err}");
     let mut previous = err.to_string();
     for cause in err.chain().skip(1) {
         let cause = cause.to_string();
         // Errors that print their source as part of their own message
         // (`{path}: {source}`) would otherwise say it twice.
         if !previous.ends_with(&cause) {
-            text.push_str(&format!("\n  caused by: {cause}"));
+            text.push_str(&format!("\n{CAUSE_PREFIX}{cause}"));
         }
         previous = cause;
     }

@@ -4,6 +4,12 @@
 use anyhow::{Context, Result};
 use std::path::PathBuf;
 
+/// How the first line of an error that `ribbar` reports starts
+/// (`app::error_report`; a study reads a case's error back from its log).
+pub const ERROR_PREFIX: &str = "error: ";
+/// How each line of that error's causes starts.
+pub const CAUSE_PREFIX: &str = "  caused by: ";
+
 /// Environment variable naming the program that study cases and benchmark
 /// runs start as child processes. Unset, it is this executable; the Python
 /// package sets it, since there this process is the Python interpreter.

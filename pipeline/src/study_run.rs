@@ -53,11 +53,13 @@ fn run_child(exe: &Path, args: &[String], log: &Path) -> Result<bool> {
 fn child_error(log: &Path) -> Option<String> {
     let text = std::fs::read_to_string(log).ok()?;
     let lines: Vec<&str> = text.lines().collect();
-    let at = lines.iter().rposition(|l| l.starts_with("error: "))?;
-    let mut why = lines[at]["error: ".len()..].to_owned();
+    let at = lines
+        .iter()
+        .rposition(|l| l.starts_with(crate::child::ERROR_PREFIX))?;
+    let mut why = lines[at][crate::child::ERROR_PREFIX.len()..].to_owned();
     for cause in lines[at + 1..]
         .iter()
-        .map_while(|l| l.strip_prefix("  caused by: "))
+        .map_while(|l| l.strip_prefix(crate::child::CAUSE_PREFIX))
     {
         why.push_str(": ");
         why.push_str(cause);
