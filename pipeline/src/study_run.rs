@@ -3,6 +3,7 @@
 //! bound; then the study's table and plots from the cases' published files.
 //! `--export snakemake` writes the same work as a Snakefile instead.
 
+use crate::child::{CAUSE_PREFIX, ERROR_PREFIX};
 use crate::cli::StudyArgs;
 use crate::post::{self, ConvergenceStudy, CurveRow, GridResult, StudyCase};
 use crate::progress::Printer;
@@ -53,13 +54,11 @@ fn run_child(exe: &Path, args: &[String], log: &Path) -> Result<bool> {
 fn child_error(log: &Path) -> Option<String> {
     let text = std::fs::read_to_string(log).ok()?;
     let lines: Vec<&str> = text.lines().collect();
-    let at = lines
-        .iter()
-        .rposition(|l| l.starts_with(crate::child::ERROR_PREFIX))?;
-    let mut why = lines[at][crate::child::ERROR_PREFIX.len()..].to_owned();
+    let at = lines.iter().rposition(|l| l.starts_with(ERROR_PREFIX))?;
+    let mut why = lines[at][ERROR_PREFIX.len()..].to_owned();
     for cause in lines[at + 1..]
         .iter()
-        .map_while(|l| l.strip_prefix(crate::child::CAUSE_PREFIX))
+        .map_while(|l| l.strip_prefix(CAUSE_PREFIX))
     {
         why.push_str(": ");
         why.push_str(cause);
