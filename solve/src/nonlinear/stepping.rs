@@ -4,7 +4,9 @@
 //! (the imposed displacement λ, or under path-following the free-end
 //! displacement, the energy a step releases or the jumps of the
 //! interface's process zone, see `control`), and the committed state
-//! offered to the observer after every converged step.
+//! offered to the observer after every converged step. What a converged
+//! attempt must pass before its commit is in `review`; how a run ends
+//! where it has no quasi-static continuation, in `ending`.
 
 use super::checkpoint::{Checkpoint, PreconditionerState};
 use super::control::{generalised_load, Constraint, Control, ControlMode, Indirect, Quantity};
@@ -15,7 +17,7 @@ use super::report::{
     CommittedView, CurveRow, Cutback, Ending, Observer, RunResult, SolveError, StepReport, Summary,
     WallTimes,
 };
-use super::workspace::{reaction_norm, residual, LinearState, Workspace};
+use super::workspace::{LinearState, Workspace};
 use crate::assembly::{
     AssemblyError, ElementLaws, KeptBulkMatrix, LoadDerivatives, Outputs, States, System, Tangents,
 };
@@ -26,12 +28,18 @@ use crate::laws::{AnyBulkLaw, BulkLaw, HeldHistory, InterfaceLaw, TangentKind};
 use crate::linalg::norm;
 use crate::nonlocal::{self, GradientAveraging};
 use crate::spec::solver::{
-    ConcreteIntegration, CurveError, InterfaceHolds, InterfaceIntegration, LinearSolverKind,
-    Loading, PathFollowing, Predictor, SolverSettings,
+    ConcreteIntegration, InterfaceHolds, InterfaceIntegration, LinearSolverKind, Loading,
+    PathFollowing, Predictor, SolverSettings,
 };
 use mesh::Model;
-use rayon::prelude::*;
 use std::time::Instant;
+
+mod ending;
+mod review;
+
+pub use ending::CRACKED;
+use ending::UNLOADED;
+use review::Review;
 
 /// The problem a run solves: the model with its laws, the Dirichlet
 /// conditions that λ moves, and what is measured per step.
@@ -57,11 +65,6 @@ const ELASTIC: f64 = 0.05;
 /// over if the last converged step released at least this fraction of its
 /// work.
 const STARTS_DISSIPATING: f64 = 1e-3;
-/// A converged state may give back up to this fraction of W_ext from the
-/// dissipated energy whatever its step's work: the scale of the residual
-/// work the force criterion leaves in a step (`crate::energy`), so that a
-/// step of a few nanometres is not refused for it.
-const DISSIPATION_FLOOR: f64 = 2e-3;
 /// How often a step is retried with its flip-flopping tets made explicit
 /// before it is cut back, without interface holds ...
 const RETRIES: usize = 2;
@@ -73,47 +76,6 @@ const DAMAGE_PASSES: usize = 20;
 /// A retried tet's damage is settled when the implicit one exceeds the one
 /// its stress used by no more than this.
 const DAMAGE_SETTLED: f64 = 1e-3;
-/// A stall at this share of the yield force or more is a limit load.
-const LIMIT_SHARE: f64 = 0.9;
-/// A step on the yield plateau changes the force by less than this
-/// fraction of it.
-const PLATEAU: f64 = 1e-3;
-/// A load below this fraction of its largest value counts as unloaded.
-const UNLOADED: f64 = 1e-3;
-/// A dissipation-controlled attempt whose last iterate puts λ below this
-/// share of the last converged λ has found the path snapping back towards
-/// the origin (see [`Driver::brittle_failure`]).
-const SNAP_BACK: f64 = 0.5;
-/// ... and concrete damage growing in at least this share of the
-/// concrete tets in that iterate: a failure spreading through the cube.
-const SPREADING: f64 = 0.01;
-/// Concrete tets at or above this damage form a crack band; one that
-/// crosses the cover from the bar to the cube's faces splits the cube
-/// (see [`Driver::brittle_failure`]).
-pub const CRACKED: f64 = 0.9;
-
-/// A displacement-controlled step whose curve bends by more than this
-/// multiple of `loading.curve_tolerance` is redone shorter.
-const CURVE_REJECT: f64 = 2.0;
-/// Steps sized by the curve's bend aim this much below the size that
-/// would meet the tolerance exactly.
-const CURVE_SAFETY: f64 = 0.9;
-
-/// What the review of a converged attempt found.
-#[derive(Default)]
-struct Review {
-    /// The IMPL-EX error indicator (`None` without explicit points).
-    impl_ex_residual: Option<f64>,
-    /// The curve's bend at its last point and the next step it asks for
-    /// (m), see [`Driver::curve_bend`].
-    curve: Option<(f64, f64)>,
-    /// The regime changes from the committed state to the accepted one,
-    /// counted before the retried points are released.
-    changes: RegimeChanges,
-    /// The step's force (N), FED (m) and σ_mb (Pa), measured once for the
-    /// curve's bend, the energy and the curve row.
-    measured: (f64, f64, f64),
-}
 
 /// The converged state of a run between steps.
 #[derive(Clone)]
@@ -1014,291 +976,6 @@ impl<'a> Driver<'a> {
         }
     }
 
-    /// After a converged attempt at `u`: the averaged history (under a
-    /// gradient-enhanced damage), then the IMPL-EX error indicator against
-    /// it.
-    fn implicit_history(
-        &mut self,
-        committed: &States,
-        u: &[f64],
-        step_wall: &mut WallTimes,
-    ) -> Result<Option<f64>, SolveError> {
-        self.average_history(committed, u, step_wall)?;
-        self.extrapolation_error(u, step_wall)
-    }
-
-    /// Under a gradient-enhanced damage, the implicit history of the
-    /// converged iterate `u`: each Mazars tet's κ from the averaged
-    /// equivalent strain of `u` (see [`crate::nonlocal`]), in the
-    /// workspace's trial states. Its time is the constitutive phase's.
-    fn average_history(
-        &mut self,
-        committed: &States,
-        u: &[f64],
-        step_wall: &mut WallTimes,
-    ) -> Result<(), SolveError> {
-        let Some(Averaging { operator, laws }) = &self.averaging else {
-            return Ok(());
-        };
-        let t = Instant::now();
-        let system: &System = self.ws.system;
-        let measures: Vec<(f64, f64)> = operator
-            .tets()
-            .par_iter()
-            .zip(laws)
-            .map(|(&i, law)| law.local_measures(&system.tet_strain(i, u)))
-            .collect();
-        let local: Vec<f64> = measures.iter().map(|m| m.0).collect();
-        let averaged = operator.average(&local)?;
-        let trial = &mut self.ws.trial.bulk;
-        for (((&i, law), &eps_bar), &(_, alpha_t)) in operator
-            .tets()
-            .iter()
-            .zip(laws)
-            .zip(&averaged)
-            .zip(&measures)
-        {
-            trial[i] = law.averaged_state(&committed.bulk[i], &trial[i], eps_bar, alpha_t);
-        }
-        let spent = t.elapsed().as_secs_f64();
-        step_wall.constitutive += spent;
-        self.wall.constitutive += spent;
-        Ok(())
-    }
-
-    /// The IMPL-EX error indicator of the converged iterate `u` (see
-    /// [`implicit_residual`]), `None` without explicit points; its time is
-    /// the constitutive phase's. Leaves the workspace's trial states and
-    /// internal forces (the step's answer) as they are.
-    fn extrapolation_error(
-        &mut self,
-        u: &[f64],
-        step_wall: &mut WallTimes,
-    ) -> Result<Option<f64>, SolveError> {
-        let Some(scratch) = self.extrapolated.as_mut() else {
-            return Ok(None);
-        };
-        let t = Instant::now();
-        let (trial, forces) = self
-            .indicator_trial
-            .get_or_insert_with(|| (self.ws.trial.clone(), self.ws.f_int.clone()));
-        std::mem::swap(&mut self.ws.trial, trial);
-        std::mem::swap(&mut self.ws.f_int, forces);
-        let e = implicit_residual(&mut self.ws, (trial, &self.explicit), u, scratch);
-        std::mem::swap(&mut self.ws.trial, trial);
-        std::mem::swap(&mut self.ws.f_int, forces);
-        let e = e?;
-        let spent = t.elapsed().as_secs_f64();
-        step_wall.constitutive += spent;
-        self.wall.constitutive += spent;
-        Ok(Some(e))
-    }
-
-    /// The failure that sends a converged step back when its IMPL-EX
-    /// error `e` passes `impl_ex_reject` × the tolerance (never at the
-    /// minimum step, which cannot be shortened), counted in the summary.
-    fn rejection(&self, path: &mut Path, plan: &Plan, e: f64) -> Option<StepFailure> {
-        let limit = self.settings.impl_ex_reject? * self.settings.impl_ex_tolerance;
-        if e <= limit || self.at_min_step(path, plan) {
-            return None;
-        }
-        path.summary.impl_ex_rejections += 1;
-        path.summary.impl_ex_max_residual = path.summary.impl_ex_max_residual.max(e);
-        Some(StepFailure::ExtrapolationError {
-            indicator: e,
-            limit,
-        })
-    }
-
-    /// Whether a converged attempt ending at (`u`, `lambda`) is kept: not
-    /// when a process-zone step moved λ too far, nor when its IMPL-EX
-    /// error passes the rejection limit, nor when the curve bent too much
-    /// within it (the failure is set in `attempt`). Returns the IMPL-EX
-    /// error, evaluated after the implicit history, and the curve's bend.
-    fn review(
-        &mut self,
-        path: &mut Path,
-        plan: &Plan,
-        (u, lambda): (&[f64], f64),
-        attempt: &mut Attempt,
-        step_wall: &mut WallTimes,
-    ) -> Result<Review, SolveError> {
-        let mut review = Review::default();
-        if attempt.failure.is_none() {
-            attempt.failure = self.load_jump(path, plan, lambda);
-        }
-        if attempt.failure.is_some() {
-            return Ok(review);
-        }
-        review.measured = self.problem.measurement.eval(u, &self.ws.f_int);
-        review.impl_ex_residual = self.implicit_history(&path.committed, u, step_wall)?;
-        if let Some(e) = review.impl_ex_residual {
-            attempt.failure = self.rejection(path, plan, e);
-        }
-        if attempt.failure.is_none() {
-            review.curve = self.curve_bend(path, plan, review.measured);
-            if let Some((deviation, _)) = review.curve {
-                attempt.failure = self.curve_rejection(path, plan, deviation);
-            }
-        }
-        if attempt.failure.is_none() {
-            review.changes = RegimeChanges::between(&path.committed, &self.ws.trial);
-            release_retried(&mut self.ws.trial, &self.explicit);
-            attempt.failure =
-                self.energy_rejection(path, (u, lambda, review.measured.0), review.changes);
-        }
-        Ok(review)
-    }
-
-    /// The energies of the state the step reached at (`u`, `lambda`) (the
-    /// workspace's trial, its retried points released), and the failure
-    /// that refuses it when it gives back from the dissipated energy, or
-    /// leaves forces out of balance whose work is, more than
-    /// `solver.dissipation_tolerance` of the work the step received plus
-    /// [`DISSIPATION_FLOOR`] of W_ext. The state is the tracker's trial
-    /// until the commit accepts it.
-    fn energy_rejection(
-        &mut self,
-        path: &mut Path,
-        (u, lambda, force): (&[f64], f64, f64),
-        regimes: RegimeChanges,
-    ) -> Option<StepFailure> {
-        // Points integrated explicitly for the whole run take their stress
-        // from an extrapolated history and their state from the implicit
-        // one: their energy record carries IMPL-EX's error (bounded by
-        // `impl_ex_tolerance`), not a sign of a state off the path.
-        let explicit = self.explicit_interface || self.explicit.iter().any(|&e| e);
-        let limit = if explicit {
-            0.0
-        } else {
-            self.settings.dissipation_tolerance
-        };
-        let tracker = self.energy.as_mut().ok()?;
-        let row = match tracker.trial(lambda, force, u, &self.ws.trial) {
-            Ok(row) => row,
-            Err(e) => {
-                self.energy = Err(format!("step {}: {e}", path.rows.len() + 1));
-                return None;
-            }
-        };
-        let last = tracker.rows().last().copied().unwrap_or_default();
-        // The work the step received: a step back along a snap-back
-        // receives none, and gives back nothing but the floor.
-        if limit == 0.0 || row.w_ext <= 0.0 {
-            return None;
-        }
-        let step_work = (row.w_ext - last.w_ext).max(0.0);
-        let allowed = limit * step_work + DISSIPATION_FLOOR * row.w_ext;
-        let given_back = last.dissipated - row.dissipated;
-        // The work of the forces left out of balance in the step: a
-        // retried step whose tets' damage passes did not settle.
-        let unbalanced = ((row.w_ext - row.w_int) - (last.w_ext - last.w_int)).abs();
-        let failure = if given_back > allowed {
-            StepFailure::CreatesEnergy {
-                of_step_work: given_back / step_work,
-                of_total_work: given_back / row.w_ext,
-                limit,
-                regimes,
-            }
-        } else if unbalanced > allowed {
-            StepFailure::OutOfBalance {
-                of_step_work: unbalanced / step_work,
-                of_total_work: unbalanced / row.w_ext,
-                limit,
-                regimes,
-            }
-        } else {
-            return None;
-        };
-        path.summary.dissipation_rejections += 1;
-        Some(failure)
-    }
-
-    /// How far the curve bends at its last point once a displacement-
-    /// controlled step ends at `u`: the distance of that point from the
-    /// chord between the one before it (or the origin) and the new one,
-    /// on axes scaled to the FED's range and to the largest |σ_mb| so far
-    /// (`loading.curve_tolerance`; see [`chord_deviation`]), and the step
-    /// size that would bring it to the tolerance. The distance grows with
-    /// the product of the two steps' lengths, whence the geometric mean in
-    /// the next size. `None` when the control is off, under path-following
-    /// or before the first step.
-    fn curve_bend(
-        &self,
-        path: &Path,
-        plan: &Plan,
-        (_, fed, bond): (f64, f64, f64),
-    ) -> Option<(f64, f64)> {
-        let loading = self.loading;
-        let tolerance = loading.curve_tolerance;
-        if tolerance <= 0.0
-            || plan.mode != ControlMode::Displacement
-            || path.mode != ControlMode::Displacement
-        {
-            return None;
-        }
-        let rows = &path.rows;
-        let last = rows.last()?;
-        let before = rows.len().checked_sub(2).map(|i| &rows[i]);
-        let fed_range = loading.fed_stop.unwrap_or(loading.u_final);
-        let stress_range = rows
-            .iter()
-            .map(|r| r.bond_stress.abs())
-            .fold(bond.abs(), f64::max);
-        if !(stress_range > 0.0 && fed.is_finite()) {
-            return None;
-        }
-        let scaled = |fed: f64, bond: f64| [fed / fed_range, bond / stress_range];
-        let deviation = chord_deviation(
-            loading.curve_error,
-            scaled(last.fed, last.bond_stress),
-            before.map_or([0.0, 0.0], |r| scaled(r.fed, r.bond_stress)),
-            scaled(fed, bond),
-        );
-        if !deviation.is_finite() {
-            return None;
-        }
-        let previous = match path.last_lambda_increment {
-            d if d > 0.0 => d,
-            _ => plan.size,
-        };
-        let next = if deviation > 0.0 {
-            CURVE_SAFETY * (previous * plan.size * tolerance / deviation).sqrt()
-        } else {
-            f64::INFINITY
-        };
-        Some((deviation, next))
-    }
-
-    /// The failure that sends a converged step back when the curve's bend
-    /// `deviation` passes `CURVE_REJECT` × `loading.curve_tolerance`, with
-    /// the size of the shorter step (the bend shrinks in proportion to
-    /// it); never for a step at or below `initial_step`.
-    fn curve_rejection(&self, path: &mut Path, plan: &Plan, deviation: f64) -> Option<StepFailure> {
-        let loading = self.loading;
-        let limit = CURVE_REJECT * loading.curve_tolerance;
-        let floor = loading.initial_step;
-        if deviation <= limit || plan.size <= floor * (1.0 + 1e-12) {
-            return None;
-        }
-        path.summary.curve_rejections += 1;
-        let next_step = (CURVE_SAFETY * plan.size * loading.curve_tolerance / deviation).max(floor);
-        Some(StepFailure::CurveResolution {
-            deviation,
-            limit,
-            next_step,
-        })
-    }
-
-    /// The failure of a converged process-zone step that moved λ to
-    /// `lambda`, further than `loading.max_step` from the last one.
-    fn load_jump(&self, path: &Path, plan: &Plan, lambda: f64) -> Option<StepFailure> {
-        let increment = lambda - path.lambda;
-        let limit = self.loading.max_step;
-        (plan.mode == ControlMode::ProcessZone && increment.abs() > limit)
-            .then_some(StepFailure::LoadJump { increment, limit })
-    }
-
     /// Whether `plan` is a step of the smallest size of its kind (which
     /// cannot be shortened).
     fn at_min_step(&self, path: &Path, plan: &Plan) -> bool {
@@ -1487,217 +1164,6 @@ impl<'a> Driver<'a> {
             InterfaceHolds::OnStall => path.summary.interface_holds_from_step.is_some(),
             InterfaceHolds::Always => true,
         }
-    }
-
-    /// The end of the run at the loaded member's limit load: the step
-    /// failed with the steel yielding and the last converged force at
-    /// least [`LIMIT_SHARE`] of the yield force (a perfectly plastic
-    /// section has no stiffness left; beyond it no quasi-static state
-    /// carries more).
-    fn limit_load(&self, path: &Path, reason: &StepFailure) -> Option<Ending> {
-        let yield_force = self.problem.yield_force?;
-        let force = path.rows.last()?.force;
-        let yielding = reason.regimes().is_none_or(|r| r.steel_yield > 0);
-        (yielding && force.abs() >= LIMIT_SHARE * yield_force)
-            .then_some(Ending::LimitLoad { force, yield_force })
-    }
-
-    /// The end of a run whose specimen fails unstably (a brittle split of
-    /// the cube): displacement control found no equilibrium beyond the last
-    /// converged step, and at the minimum dissipation step the attempt's
-    /// last iterate sits at λ below [`SNAP_BACK`] of the last converged λ
-    /// with concrete damage growing in at least [`SPREADING`] of the
-    /// concrete tets. The energy stored at the
-    /// last converged step then drives the failure with the load falling
-    /// back towards zero: under a monotone imposed displacement the
-    /// specimen fails dynamically at that step, so there is no
-    /// quasi-static continuation and its force is the failure load.
-    ///
-    /// Dissipation control may also converge some steps down that branch
-    /// before it stalls (λ back near zero or below it, the load a few per
-    /// cent of the peak): the split then began at the step of the largest
-    /// force, whose force is the failure load, and the stall counts as the
-    /// same ending once the attempt's λ is below [`SNAP_BACK`] of that
-    /// step's λ.
-    ///
-    /// With interface points held (tried before this diagnosis), the
-    /// attempt at the smallest energy step may instead converge with λ in
-    /// place while the held points cannot settle and concrete damage
-    /// spreads: no state in balance with the interface's own history
-    /// releases that little energy, the same unstable split seen from the
-    /// other side (found on the stress holdout's cases 7 and 19, which
-    /// end at a snap-back when their points are not held). The failure
-    /// load is then the largest force.
-    fn brittle_failure(
-        &self,
-        path: &Path,
-        plan: &Plan,
-        lambda: f64,
-        reason: &StepFailure,
-    ) -> Option<Ending> {
-        let last = path.rows.last()?;
-        let (damaging, concrete) = self.spreading_damage(reason)?;
-        if plan.mode != ControlMode::Energy {
-            return None;
-        }
-        let peak = largest_force_row(&path.rows)?;
-        let unsettled_points = match reason {
-            StepFailure::Unsettled { points, .. } => *points,
-            _ => 0,
-        };
-        // The snap-back is the evidence whenever λ went back; the held
-        // points' only where it did not.
-        let snapped = lambda < SNAP_BACK * path.lambda || lambda < SNAP_BACK * peak.u_imposed;
-        // Once the points were held from the first step (the last
-        // resort), an attempt at the smallest energy step whose iterates
-        // carry λ far forward with damage spreading has no equilibrium
-        // near the path either (the stress holdout-2's case 22: λ from
-        // 0.133 to 0.455 mm, damage growing in 2 400 of the tets).
-        let wandered = path.summary.interface_holds_from_step == Some(1)
-            && lambda > (2.0 - SNAP_BACK) * path.lambda;
-        // With no remedy left, a stall whose converged state is cracked
-        // through the cover is the split itself, wherever λ went: the
-        // ring of concrete that held the ribs' radial push is cut
-        // (docs/solver.md, "How a run ends").
-        let cracked_through = self.cracked_through(path);
-        let split = cracked_through > 0 && !self.may_hold_from_start(path);
-        let (force, u_imposed) = if lambda < SNAP_BACK * path.lambda {
-            (last.force, path.lambda)
-        } else if snapped || wandered || unsettled_points > 0 || split {
-            (peak.force, peak.u_imposed)
-        } else {
-            return None;
-        };
-        Some(Ending::BrittleFailure {
-            force,
-            u_imposed,
-            snap_back_to: lambda,
-            unsettled_points: if snapped { 0 } else { unsettled_points },
-            cracked_through_tets: cracked_through,
-            damaging_concrete_tets: damaging,
-            concrete_tets: concrete,
-        })
-    }
-
-    /// Whether a stall may still start the run again with the interface
-    /// points held from step 1: under `on_stall`, once they were held from
-    /// a later step ("Holds after a stall").
-    fn may_hold_from_start(&self, path: &Path) -> bool {
-        self.settings.interface_holds == InterfaceHolds::OnStall
-            && path
-                .summary
-                .interface_holds_from_step
-                .is_some_and(|k| k > 1)
-    }
-
-    /// Concrete tets of the last converged state with damage of at least
-    /// [`CRACKED`] in bands from the bar to the cube's faces.
-    fn cracked_through(&self, path: &Path) -> usize {
-        let cracked: Vec<bool> = path
-            .committed
-            .bulk
-            .iter()
-            .map(|s| s.damage >= CRACKED)
-            .collect();
-        self.problem.model.cover_crossing_tets(&cracked)
-    }
-
-    /// Of a failed attempt whose last iterate grew concrete damage in at
-    /// least [`SPREADING`] of the concrete tets: those tets' count and the
-    /// concrete's.
-    fn spreading_damage(&self, reason: &StepFailure) -> Option<(usize, usize)> {
-        self.spreading(reason.regimes()?.concrete_damage)
-    }
-
-    /// `damaging` and the count of concrete tets when `damaging` is at
-    /// least [`SPREADING`] of them.
-    fn spreading(&self, damaging: usize) -> Option<(usize, usize)> {
-        let concrete = self
-            .problem
-            .model
-            .tet_region
-            .iter()
-            .filter(|r| **r == mesh::Region::Concrete)
-            .count();
-        (damaging as f64 >= SPREADING * concrete as f64).then_some((damaging, concrete))
-    }
-
-    /// How the run ends at its last converged step, if it does there: on
-    /// the yield plateau, unloaded, or down a split's branch.
-    fn ending_after_step(&self, path: &Path) -> Option<Ending> {
-        self.yield_plateau(path)
-            .or_else(|| self.lost_load(path))
-            .or_else(|| self.split_branch(path))
-    }
-
-    /// The end of a run whose dissipation control converged a step down a
-    /// split's branch: λ fell in the step, below [`SNAP_BACK`] of the λ of
-    /// the largest force, with concrete damage growing in at least
-    /// [`SPREADING`] of the tets. The specimen has split at that force
-    /// (the same ending as a stall there, [`Driver::brittle_failure`]); the
-    /// branch beyond, back to λ < 0 and loaded again, is a split cube's,
-    /// not the pull-out's (found on the stress test's tiny smooth bar with
-    /// λ_0 = 1e-6 m, which, followed on, pushed the bar back in and
-    /// reloaded it with its dissipation falling by 2.4 % of W_ext).
-    fn split_branch(&self, path: &Path) -> Option<Ending> {
-        if path.last_lambda_increment >= 0.0 {
-            return None;
-        }
-        let peak = largest_force_row(&path.rows)?;
-        if path.lambda >= SNAP_BACK * peak.u_imposed {
-            return None;
-        }
-        let (damaging, concrete) = self.spreading(path.damaging_tets)?;
-        Some(Ending::BrittleFailure {
-            force: peak.force,
-            u_imposed: peak.u_imposed,
-            snap_back_to: path.lambda,
-            unsettled_points: 0,
-            cracked_through_tets: self.cracked_through(path),
-            damaging_concrete_tets: damaging,
-            concrete_tets: concrete,
-        })
-    }
-
-    /// The end of the run on the loaded member's yield plateau: the last
-    /// converged step yielded steel, carries at least [`LIMIT_SHARE`] of
-    /// the yield force, and its force grew by less than [`PLATEAU`] of
-    /// itself. The bar then only stretches plastically beyond the bearing
-    /// face; the bond sees no more load, so further steps carry no
-    /// information.
-    fn yield_plateau(&self, path: &Path) -> Option<Ending> {
-        let yield_force = self.problem.yield_force?;
-        let [.., before, last] = path.rows.as_slice() else {
-            return None;
-        };
-        let force = last.force;
-        let flat = (force - before.force).abs() <= PLATEAU * force.abs();
-        (path.steel_yielding && flat && force.abs() >= LIMIT_SHARE * yield_force)
-            .then_some(Ending::LimitLoad { force, yield_force })
-    }
-
-    /// The end of a run whose specimen lost its load: the last converged
-    /// force is below [`UNLOADED`] of the peak, reached at an earlier step.
-    fn lost_load(&self, path: &Path) -> Option<Ending> {
-        let [.., last] = path.rows.as_slice() else {
-            return None;
-        };
-        let peak_force = largest_force_row(&path.rows)?.force.abs();
-        if peak_force == 0.0 || last.force.abs() > UNLOADED * peak_force {
-            return None;
-        }
-        let broken_concrete_tets = path
-            .committed
-            .bulk
-            .iter()
-            .zip(&self.problem.model.tet_region)
-            .filter(|(s, r)| **r == mesh::Region::Concrete && s.damage > 0.99)
-            .count();
-        Some(Ending::Unloaded {
-            force: last.force,
-            peak_force,
-            broken_concrete_tets,
-        })
     }
 
     /// The load has fallen to a negligible share of its largest value: the
@@ -2090,46 +1556,6 @@ fn in_balance(
     Ok((held && relative <= tolerance, relative))
 }
 
-/// IMPL-EX error indicator of a converged step: the residual of the
-/// converged displacement `u` when every concrete point (and IMPL-EX
-/// interface point) takes the damage its implicit history reached in the
-/// step instead of the extrapolated one (what an implicit Newton
-/// iteration would see there), relative to the reaction like the force
-/// criterion. `explicit`: the tets integrated explicitly for the whole
-/// run (see `release_retried`). Overwrites `scratch` and the
-/// workspace's trial states and internal forces (see
-/// `Driver::extrapolation_error`, which keeps the step's).
-fn implicit_residual(
-    ws: &mut Workspace<'_>,
-    (converged, explicit): (&States, &[bool]),
-    u: &[f64],
-    scratch: &mut States,
-) -> Result<f64, AssemblyError> {
-    // The states as the commit leaves them (retried tets and held points
-    // released to the larger damage).
-    scratch.clone_from(converged);
-    release_retried(scratch, explicit);
-    for s in &mut scratch.bulk {
-        s.explicit_damage = Some(s.damage);
-    }
-    for s in &mut scratch.interface {
-        s.explicit_lambda = s.explicit_lambda.map(|_| s.lambda_max);
-    }
-    let system: &System = ws.system;
-    system.evaluate(
-        ws.laws,
-        u,
-        scratch,
-        &mut ws.trial,
-        Tangents::all(TangentKind::Secant),
-        Outputs::forces_of_stresses(&mut ws.f_int),
-    )?;
-    let mut r = vec![0.0; system.dofs().n_free()];
-    residual(system.dofs(), &ws.f_int, &mut r);
-    let reaction = reaction_norm(system, &ws.f_int);
-    Ok(norm(&r) / if reaction > 0.0 { reaction } else { 1.0 })
-}
-
 /// The process's peak resident memory so far, MiB (Linux `VmHWM`); `None`
 /// where /proc is not available.
 fn peak_resident_mib() -> Option<f64> {
@@ -2137,44 +1563,4 @@ fn peak_resident_mib() -> Option<f64> {
     let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
     let kib: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
     Some(kib / 1024.0)
-}
-
-/// How far `p` lies from the chord `a`–`b` (scaled axes: FED, σ_mb), as
-/// `measure` asks. `Stress` takes, where the FED grows through the three
-/// points, the σ_mb distance at `p`'s FED: the error a curve read along
-/// FED gets from the chord there. On r1-coarse's steep rise to the
-/// adhesion peak (scaled slope 10–20) the shortest distance is that many
-/// times smaller, and that rise carried most of its curve error
-/// (docs/solver.md, "Resolving the curve"). Elsewhere (a snap-back, a FED
-/// at a standstill) both take the shortest distance.
-fn chord_deviation(measure: CurveError, p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
-    if measure == CurveError::Stress && a[0] < p[0] && p[0] < b[0] {
-        let t = (p[0] - a[0]) / (b[0] - a[0]);
-        (p[1] - (a[1] + t * (b[1] - a[1]))).abs()
-    } else {
-        distance_to_segment(p, a, b)
-    }
-}
-
-/// Distance of `p` from the segment from `a` to `b` (a point when they
-/// coincide).
-fn distance_to_segment(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
-    let (ab, ap) = ([b[0] - a[0], b[1] - a[1]], [p[0] - a[0], p[1] - a[1]]);
-    let length2 = ab[0] * ab[0] + ab[1] * ab[1];
-    let t = if length2 > 0.0 {
-        ((ap[0] * ab[0] + ap[1] * ab[1]) / length2).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    (ap[0] - t * ab[0]).hypot(ap[1] - t * ab[1])
-}
-
-/// The step of the largest |force| (the latest of equal ones when the last
-/// step is among them, else the earliest), `None` before the first step.
-fn largest_force_row(rows: &[CurveRow]) -> Option<&CurveRow> {
-    let last = rows.last()?;
-    Some(rows.iter().fold(
-        last,
-        |a, r| if r.force.abs() > a.force.abs() { r } else { a },
-    ))
 }
