@@ -20,7 +20,8 @@ use solve::nonlinear::{
 };
 use solve::problems::pullout::solve_pullout;
 use solve::spec::solver::{
-    CurveError, Forcing, InterfaceHolds, LinearSolverKind, Loading, PathFollowing, SolverSettings,
+    CurveError, Forcing, InterfaceHolds, LinearSolverKind, Loading, MultigridRebuild,
+    PathFollowing, PreconditionerKind, SolverSettings,
 };
 
 /// A structured block of hexahedra, each split into 6 positive tets.
@@ -870,6 +871,58 @@ fn resume_equals_uninterrupted() {
         };
         resume_case(&m, &laws, &loading, &settings);
     }
+    // The amortised rebuild's count goes into the checkpoint with the
+    // hierarchy's values.
+    let settings = SolverSettings {
+        preconditioner: PreconditionerKind::Multigrid,
+        multigrid_rebuild: MultigridRebuild::Amortised,
+        ..SolverSettings::default()
+    };
+    resume_case(&m, &laws, &loading, &settings);
+}
+
+/// `solver.multigrid_rebuild: amortised` renews a hierarchy that the
+/// softening interface has worn, which the half limit keeps as long as
+/// no solve needs more than half of `krylov_max_iterations`: more
+/// builds, and the curve the same to within the force tolerance's
+/// reach.
+#[test]
+fn amortised_rebuild_renews_a_worn_hierarchy() {
+    let m = slab_pullout(6);
+    let laws = pullout_laws(&m);
+    let loading = Loading {
+        u_final: 3e-4,
+        initial_step: 1e-5,
+        max_step: 2e-5,
+        ..Loading::default()
+    };
+    let run = |multigrid_rebuild| {
+        let settings = SolverSettings {
+            preconditioner: PreconditionerKind::Multigrid,
+            multigrid_rebuild,
+            krylov_max_iterations: 200,
+            ..SolverSettings::default()
+        };
+        solve_pullout(&m, &laws, &loading, &settings, None, &mut Silent).unwrap()
+    };
+    let half = run(MultigridRebuild::HalfLimit);
+    let amortised = run(MultigridRebuild::Amortised);
+    assert!(
+        amortised.summary.factorisations > half.summary.factorisations,
+        "builds: amortised {} against half limit {}",
+        amortised.summary.factorisations,
+        half.summary.factorisations
+    );
+    let peak = |rows: &[CurveRow]| rows.iter().map(|r| r.force.abs()).fold(0.0, f64::max);
+    let (a, b) = (peak(&half.rows), peak(&amortised.rows));
+    assert!((a - b).abs() <= 1e-3 * a, "peak {a} against {b}");
+    let (a, b) = (half.rows.last().unwrap(), amortised.rows.last().unwrap());
+    assert!(
+        (a.force - b.force).abs() <= 1e-3 * a.force.abs(),
+        "last force {} against {}",
+        a.force,
+        b.force
+    );
 }
 
 /// Runs uninterrupted, and again from a saved checkpoint of step 4; the

@@ -71,6 +71,11 @@ pub struct ObserverRecord {
 pub struct PreconditionerState {
     pub values: Vec<f64>,
     pub refactor: bool,
+    /// The rebuild count of `solver.multigrid_rebuild: amortised`: the
+    /// first solve's iterations with the kept hierarchy, and the excess
+    /// of the solves since.
+    pub fresh_iterations: Option<usize>,
+    pub excess_iterations: usize,
 }
 
 /// A checkpoint file that cannot be written or read.
@@ -86,7 +91,7 @@ pub enum CheckpointError {
     Corrupt { path: String, detail: String },
 }
 
-const CHECKPOINT_MAGIC: u64 = 0x7269_6262_6172_000b;
+const CHECKPOINT_MAGIC: u64 = 0x7269_6262_6172_000c;
 
 impl Checkpoint {
     /// Writes atomically (temporary file then rename), bincode.

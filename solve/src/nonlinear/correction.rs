@@ -17,7 +17,7 @@ use super::workspace::{Kept, Workspace};
 use crate::assembly::{Outputs, States, Tangents};
 use crate::laws::TangentKind;
 use crate::linalg::{gmres, pcg, LinearError, Preconditioner, SplitMatrix, SymLower};
-use crate::spec::solver::LinearSolverKind;
+use crate::spec::solver::{LinearSolverKind, MultigridRebuild, REBUILD_COST_ITERATIONS};
 use std::time::Instant;
 
 impl Workspace<'_> {
@@ -89,6 +89,8 @@ impl Workspace<'_> {
         let res = self.lin.kept.build(values);
         self.wall.factorisation += t.elapsed().as_secs_f64();
         self.lin.factorisations += 1;
+        self.lin.fresh_iterations = None;
+        self.lin.excess_iterations = 0;
         res
     }
 
@@ -199,7 +201,7 @@ impl Workspace<'_> {
         match res {
             Ok(info) => {
                 self.lin.krylov_iterations += info.iterations;
-                self.lin.refactor = info.iterations > max / 2;
+                self.lin.refactor = info.iterations > max / 2 || self.worn(info.iterations);
                 Ok(())
             }
             Err(e) => {
@@ -209,6 +211,24 @@ impl Workspace<'_> {
                 Err(e)
             }
         }
+    }
+
+    /// Under `solver.multigrid_rebuild: amortised`, counts a solve of
+    /// `iterations` with the kept hierarchy and says whether the
+    /// iterations its solves needed beyond the first one's have passed
+    /// what a build costs.
+    fn worn(&mut self, iterations: usize) -> bool {
+        if self.settings.multigrid_rebuild != MultigridRebuild::Amortised
+            || !matches!(self.lin.kept, Kept::Multigrid { .. })
+        {
+            return false;
+        }
+        let lin = &mut self.lin;
+        match lin.fresh_iterations {
+            None => lin.fresh_iterations = Some(iterations),
+            Some(fresh) => lin.excess_iterations += iterations.saturating_sub(fresh),
+        }
+        lin.excess_iterations > REBUILD_COST_ITERATIONS
     }
 
     /// GMRES failed with a fresh hierarchy of the symmetric part (which may

@@ -384,6 +384,8 @@ impl<'a> Driver<'a> {
                 self.wall.factorisation += t.elapsed().as_secs_f64();
                 lin.preconditioner = p.values;
                 lin.refactor = p.refactor;
+                lin.fresh_iterations = p.fresh_iterations;
+                lin.excess_iterations = p.excess_iterations;
             }
         }
         let (last_increment, last_lambda_increment) = if cp.last_increment.len() == n_total {
@@ -1256,6 +1258,8 @@ impl<'a> Driver<'a> {
             .then(|| PreconditionerState {
                 values: lin.preconditioner.clone(),
                 refactor: lin.refactor,
+                fresh_iterations: lin.fresh_iterations,
+                excess_iterations: lin.excess_iterations,
             }),
             last_increment: path.last_increment.clone(),
             last_step: path.last_lambda_increment,

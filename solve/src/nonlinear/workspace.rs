@@ -201,6 +201,11 @@ pub(crate) struct LinearState {
     pub(crate) preconditioner: Vec<f64>,
     /// The preconditioner is missing or has become poor: build it anew.
     pub(crate) refactor: bool,
+    /// GMRES iterations of the first solve with the kept hierarchy, and
+    /// those the solves after it needed beyond that
+    /// (`solver.multigrid_rebuild: amortised`).
+    pub(crate) fresh_iterations: Option<usize>,
+    pub(crate) excess_iterations: usize,
 }
 
 impl LinearState {
@@ -261,6 +266,8 @@ impl LinearState {
                 vec![0.0; system.nnz()]
             },
             refactor: true,
+            fresh_iterations: None,
+            excess_iterations: 0,
         })
     }
 }
