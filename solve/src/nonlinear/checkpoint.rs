@@ -71,11 +71,28 @@ pub struct ObserverRecord {
 pub struct PreconditionerState {
     pub values: Vec<f64>,
     pub refactor: bool,
-    /// The rebuild count of `solver.multigrid_rebuild: amortised`: the
-    /// first solve's iterations with the kept hierarchy, and the excess
-    /// of the solves since.
-    pub fresh_iterations: Option<usize>,
-    pub excess_iterations: usize,
+    pub wear: HierarchyWear,
+}
+
+/// The wear of a kept multigrid hierarchy that `solver.multigrid_rebuild:
+/// amortised` counts: the GMRES iterations of the first solve with it,
+/// and those the solves after it needed beyond that.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+pub struct HierarchyWear {
+    first: Option<usize>,
+    excess: usize,
+}
+
+impl HierarchyWear {
+    /// Counts a solve of `iterations` with the hierarchy; returns the
+    /// excess so far.
+    pub(crate) fn after_solve(&mut self, iterations: usize) -> usize {
+        match self.first {
+            None => self.first = Some(iterations),
+            Some(first) => self.excess += iterations.saturating_sub(first),
+        }
+        self.excess
+    }
 }
 
 /// A checkpoint file that cannot be written or read.

@@ -12,6 +12,7 @@
 //! multigrid`, a multigrid hierarchy) kept while GMRES needs few iterations
 //! with it.
 
+use super::checkpoint::HierarchyWear;
 use super::control::{Border, BorderedPreconditioner};
 use super::workspace::{Kept, Workspace};
 use crate::assembly::{Outputs, States, Tangents};
@@ -89,8 +90,7 @@ impl Workspace<'_> {
         let res = self.lin.kept.build(values);
         self.wall.factorisation += t.elapsed().as_secs_f64();
         self.lin.factorisations += 1;
-        self.lin.fresh_iterations = None;
-        self.lin.excess_iterations = 0;
+        self.lin.wear = HierarchyWear::default();
         res
     }
 
@@ -214,21 +214,12 @@ impl Workspace<'_> {
     }
 
     /// Under `solver.multigrid_rebuild: amortised`, counts a solve of
-    /// `iterations` with the kept hierarchy and says whether the
-    /// iterations its solves needed beyond the first one's have passed
-    /// what a build costs.
+    /// `iterations` with the kept hierarchy and says whether its wear has
+    /// passed what a build costs.
     fn worn(&mut self, iterations: usize) -> bool {
-        if self.settings.multigrid_rebuild != MultigridRebuild::Amortised
-            || !matches!(self.lin.kept, Kept::Multigrid { .. })
-        {
-            return false;
-        }
-        let lin = &mut self.lin;
-        match lin.fresh_iterations {
-            None => lin.fresh_iterations = Some(iterations),
-            Some(fresh) => lin.excess_iterations += iterations.saturating_sub(fresh),
-        }
-        lin.excess_iterations > REBUILD_COST_ITERATIONS
+        self.settings.multigrid_rebuild == MultigridRebuild::Amortised
+            && matches!(self.lin.kept, Kept::Multigrid { .. })
+            && self.lin.wear.after_solve(iterations) > REBUILD_COST_ITERATIONS
     }
 
     /// GMRES failed with a fresh hierarchy of the symmetric part (which may

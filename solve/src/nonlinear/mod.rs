@@ -17,7 +17,9 @@ mod stepping;
 mod summary;
 mod workspace;
 
-pub use checkpoint::{Checkpoint, CheckpointError, ObserverRecord, PreconditionerState};
+pub use checkpoint::{
+    Checkpoint, CheckpointError, HierarchyWear, ObserverRecord, PreconditionerState,
+};
 pub use control::ControlMode;
 pub use failure::{RegimeChanges, StepFailure};
 pub use problem::{Dirichlet, Measurement};

@@ -384,8 +384,7 @@ impl<'a> Driver<'a> {
                 self.wall.factorisation += t.elapsed().as_secs_f64();
                 lin.preconditioner = p.values;
                 lin.refactor = p.refactor;
-                lin.fresh_iterations = p.fresh_iterations;
-                lin.excess_iterations = p.excess_iterations;
+                lin.wear = p.wear;
             }
         }
         let (last_increment, last_lambda_increment) = if cp.last_increment.len() == n_total {
@@ -1258,8 +1257,7 @@ impl<'a> Driver<'a> {
             .then(|| PreconditionerState {
                 values: lin.preconditioner.clone(),
                 refactor: lin.refactor,
-                fresh_iterations: lin.fresh_iterations,
-                excess_iterations: lin.excess_iterations,
+                wear: lin.wear,
             }),
             last_increment: path.last_increment.clone(),
             last_step: path.last_lambda_increment,

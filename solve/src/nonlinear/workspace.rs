@@ -2,6 +2,7 @@
 //! the internal forces and tangent values of the current iterate, the kept
 //! linear-solver state and the wall times of the current step.
 
+use super::checkpoint::HierarchyWear;
 use super::summary::WallTimes;
 use crate::assembly::{
     AssemblyError, DofMap, ElementLaws, KeptBulkMatrix, LoadDerivatives, Outputs, States, System,
@@ -201,11 +202,9 @@ pub(crate) struct LinearState {
     pub(crate) preconditioner: Vec<f64>,
     /// The preconditioner is missing or has become poor: build it anew.
     pub(crate) refactor: bool,
-    /// GMRES iterations of the first solve with the kept hierarchy, and
-    /// those the solves after it needed beyond that
+    /// The kept hierarchy's wear since its build
     /// (`solver.multigrid_rebuild: amortised`).
-    pub(crate) fresh_iterations: Option<usize>,
-    pub(crate) excess_iterations: usize,
+    pub(crate) wear: HierarchyWear,
 }
 
 impl LinearState {
@@ -266,8 +265,7 @@ impl LinearState {
                 vec![0.0; system.nnz()]
             },
             refactor: true,
-            fresh_iterations: None,
-            excess_iterations: 0,
+            wear: HierarchyWear::default(),
         })
     }
 }
