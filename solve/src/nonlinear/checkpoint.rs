@@ -76,23 +76,99 @@ pub struct PreconditionerState {
 
 /// The wear of a kept multigrid hierarchy that `solver.multigrid_rebuild:
 /// amortised` counts: the GMRES iterations of the first solve with it,
-/// and those the solves after it needed beyond that.
+/// those the solves after it needed beyond that, and whether the last
+/// rebuilds for wear paid.
+///
+/// A rebuild pays when the first solve with the new hierarchy needs
+/// clearly fewer iterations per decade of residual than the old one's
+/// solves after its first ([`REBUILD_PAID`]). Past a peak the solves'
+/// iteration counts scatter with the right-hand side whatever the
+/// hierarchy, and that scatter, counted against the first solve, looks
+/// like wear: each rebuild that does not pay doubles the wear the next
+/// one waits for (up to [`MAX_WEAR_DOUBLINGS`] times), and one that pays
+/// resets it.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 pub struct HierarchyWear {
     first: Option<usize>,
     excess: usize,
+    /// GMRES iterations and decades of relative residual of the solves
+    /// after the first.
+    later_iterations: usize,
+    later_decades: f64,
+    /// Iterations per decade of the worn hierarchy's later solves, while
+    /// the first solve with its replacement is awaited.
+    replaced_rate: Option<f64>,
+    /// Rebuilds for wear in a row that did not pay.
+    doublings: u32,
+    /// The wear has passed what a build costs.
+    worn: bool,
 }
 
+/// A rebuild for wear pays when the new hierarchy's first solve needs at
+/// most this share of the worn one's iterations per decade.
+pub const REBUILD_PAID: f64 = 0.75;
+/// The wear a rebuild waits for doubles at most this many times (40 → 640
+/// iterations).
+pub const MAX_WEAR_DOUBLINGS: u32 = 4;
+
 impl HierarchyWear {
-    /// Counts a solve of `iterations` with the hierarchy; returns the
-    /// excess so far.
-    pub(crate) fn after_solve(&mut self, iterations: usize) -> usize {
+    /// Counts a solve of `iterations` that reached `relative_residual`
+    /// with the hierarchy; returns whether the wear so far has passed what
+    /// a build costs (`build_cost` iterations, doubled for each rebuild in
+    /// a row that did not pay).
+    pub(crate) fn after_solve(
+        &mut self,
+        iterations: usize,
+        relative_residual: f64,
+        build_cost: usize,
+    ) -> bool {
+        let decades = decades_of(relative_residual);
         match self.first {
-            None => self.first = Some(iterations),
-            Some(first) => self.excess += iterations.saturating_sub(first),
+            None => {
+                self.first = Some(iterations);
+                if let (Some(old), Some(d)) = (self.replaced_rate.take(), decades) {
+                    let paid = (iterations as f64) / d <= REBUILD_PAID * old;
+                    self.doublings = if paid {
+                        0
+                    } else {
+                        (self.doublings + 1).min(MAX_WEAR_DOUBLINGS)
+                    };
+                }
+            }
+            Some(first) => {
+                self.excess += iterations.saturating_sub(first);
+                if let Some(d) = decades {
+                    self.later_iterations += iterations;
+                    self.later_decades += d;
+                }
+            }
         }
-        self.excess
+        self.worn = self.excess > build_cost << self.doublings;
+        self.worn
     }
+
+    /// The wear of a new hierarchy. When the old one is replaced because
+    /// it wore, the new one's first solve is judged against it.
+    pub(crate) fn rebuilt(self) -> Self {
+        if self.first.is_none() {
+            // Built again before a solve (the secant after an indefinite
+            // matrix): the judgement waits for the first solve still.
+            return self;
+        }
+        let replaced_rate = (self.worn && self.later_decades > 0.0)
+            .then(|| self.later_iterations as f64 / self.later_decades);
+        Self {
+            replaced_rate,
+            doublings: self.doublings,
+            ..Self::default()
+        }
+    }
+}
+
+/// Decades of residual reduction of a solve that reached
+/// `relative_residual` (none for an empty right-hand side).
+fn decades_of(relative_residual: f64) -> Option<f64> {
+    (relative_residual > 0.0 && relative_residual < 1.0).then(|| -relative_residual.log10())
 }
 
 /// A checkpoint file that cannot be written or read.
@@ -108,7 +184,7 @@ pub enum CheckpointError {
     Corrupt { path: String, detail: String },
 }
 
-const CHECKPOINT_MAGIC: u64 = 0x7269_6262_6172_000c;
+const CHECKPOINT_MAGIC: u64 = 0x7269_6262_6172_000d;
 
 impl Checkpoint {
     /// Writes atomically (temporary file then rename), bincode.
@@ -166,5 +242,77 @@ impl Checkpoint {
             ));
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Solves of `iterations` each reaching `residual` until the wear
+    /// passes a 40-iteration build; returns how many it took.
+    fn solves_until_worn(wear: &mut HierarchyWear, iterations: usize, residual: f64) -> usize {
+        (1..=100)
+            .find(|_| wear.after_solve(iterations, residual, 40))
+            .expect("the wear passes the build's cost")
+    }
+
+    fn close(a: Option<f64>, b: f64) -> bool {
+        a.is_some_and(|a| (a - b).abs() <= 1e-12 * b)
+    }
+
+    #[test]
+    fn a_rebuild_that_does_not_pay_doubles_the_wear_awaited() {
+        let mut wear = HierarchyWear::default();
+        assert!(!wear.after_solve(10, 1e-3, 40));
+        // 20 beyond the first each: the third later solve passes 40.
+        assert_eq!(solves_until_worn(&mut wear, 30, 1e-3), 3);
+        // The new hierarchy's first solve needs as many iterations per
+        // decade as the worn one's (10): the rebuild did not pay.
+        let mut wear = wear.rebuilt();
+        assert!(!wear.after_solve(30, 1e-3, 40));
+        assert_eq!(wear.doublings, 1);
+        assert_eq!(solves_until_worn(&mut wear, 50, 1e-3), 5, "80 awaited");
+        // A build before any solve (the secant's) keeps the judgement.
+        let wear = wear.rebuilt();
+        assert!(close(wear.replaced_rate, 50.0 / 3.0));
+        let mut wear = wear.rebuilt();
+        assert!(close(wear.replaced_rate, 50.0 / 3.0));
+        // 8 per decade against 16.7: this one paid, the next waits for 40.
+        assert!(!wear.after_solve(24, 1e-3, 40));
+        assert_eq!(wear.doublings, 0);
+        assert_eq!(solves_until_worn(&mut wear, 45, 1e-3), 2);
+    }
+
+    #[test]
+    fn rebuilds_that_do_not_pay_wait_at_most_sixteen_builds() {
+        // First solves of 16 iterations per decade after later ones of 21:
+        // no rebuild pays.
+        let mut wear = HierarchyWear::default();
+        wear.after_solve(32, 1e-2, 40);
+        for doublings in 1..=6 {
+            solves_until_worn(&mut wear, 42, 1e-2);
+            wear = wear.rebuilt();
+            wear.after_solve(32, 1e-2, 40);
+            assert_eq!(wear.doublings, doublings.min(MAX_WEAR_DOUBLINGS));
+        }
+        // 10 beyond the first a solve: 640 iterations wait for 65 solves.
+        assert_eq!(solves_until_worn(&mut wear, 42, 1e-2), 65);
+    }
+
+    /// A rebuild for another reason (GMRES failed, the half limit) with
+    /// the hierarchy unworn is not judged; an empty right-hand side
+    /// (relative residual 0) counts no decades.
+    #[test]
+    fn only_rebuilds_for_wear_are_judged() {
+        let mut wear = HierarchyWear::default();
+        wear.after_solve(10, 1e-3, 40);
+        wear.after_solve(0, 0.0, 40);
+        assert_eq!(wear.later_decades, 0.0);
+        wear.after_solve(30, 1e-3, 40);
+        let mut wear = wear.rebuilt();
+        assert_eq!(wear.replaced_rate, None);
+        wear.after_solve(30, 1e-3, 40);
+        assert_eq!(wear.doublings, 0);
     }
 }

@@ -12,12 +12,11 @@
 //! multigrid`, a multigrid hierarchy) kept while GMRES needs few iterations
 //! with it.
 
-use super::checkpoint::HierarchyWear;
 use super::control::{Border, BorderedPreconditioner};
 use super::workspace::{Kept, Workspace};
 use crate::assembly::{Outputs, States, Tangents};
 use crate::laws::TangentKind;
-use crate::linalg::{gmres, pcg, LinearError, Preconditioner, SplitMatrix, SymLower};
+use crate::linalg::{gmres, pcg, KrylovInfo, LinearError, Preconditioner, SplitMatrix, SymLower};
 use crate::spec::solver::{LinearSolverKind, MultigridRebuild, REBUILD_COST_ITERATIONS};
 use std::time::Instant;
 
@@ -90,7 +89,7 @@ impl Workspace<'_> {
         let res = self.lin.kept.build(values);
         self.wall.factorisation += t.elapsed().as_secs_f64();
         self.lin.factorisations += 1;
-        self.lin.wear = HierarchyWear::default();
+        self.lin.wear = self.lin.wear.rebuilt();
         res
     }
 
@@ -201,7 +200,7 @@ impl Workspace<'_> {
         match res {
             Ok(info) => {
                 self.lin.krylov_iterations += info.iterations;
-                self.lin.refactor = info.iterations > max / 2 || self.worn(info.iterations);
+                self.lin.refactor = info.iterations > max / 2 || self.worn(&info);
                 Ok(())
             }
             Err(e) => {
@@ -213,13 +212,17 @@ impl Workspace<'_> {
         }
     }
 
-    /// Under `solver.multigrid_rebuild: amortised`, counts a solve of
-    /// `iterations` with the kept hierarchy and says whether its wear has
-    /// passed what a build costs.
-    fn worn(&mut self, iterations: usize) -> bool {
+    /// Under `solver.multigrid_rebuild: amortised`, counts a solve with
+    /// the kept hierarchy and says whether its wear has passed what a
+    /// build costs ([`super::HierarchyWear`]).
+    fn worn(&mut self, info: &KrylovInfo) -> bool {
         self.settings.multigrid_rebuild == MultigridRebuild::Amortised
             && matches!(self.lin.kept, Kept::Multigrid { .. })
-            && self.lin.wear.after_solve(iterations) > REBUILD_COST_ITERATIONS
+            && self.lin.wear.after_solve(
+                info.iterations,
+                info.relative_residual,
+                REBUILD_COST_ITERATIONS,
+            )
     }
 
     /// GMRES failed with a fresh hierarchy of the symmetric part (which may

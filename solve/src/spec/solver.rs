@@ -289,7 +289,9 @@ pub enum MultigridRebuild {
     /// iterations of the first of them, more GMRES iterations in all than
     /// a build costs ([`REBUILD_COST_ITERATIONS`]), so that a hierarchy
     /// built before the damage grew is renewed even when no single solve
-    /// passes the half limit.
+    /// passes the half limit. A rebuild whose first solve needs no fewer
+    /// iterations per decade of residual than the worn hierarchy's solves
+    /// did not pay: the wear the next rebuild waits for doubles.
     Amortised,
 }
 
