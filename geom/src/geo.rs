@@ -217,9 +217,9 @@ fn geo_parameters(w: &mut String, layout: &Layout) {
          Geometry.OCCBoundsUseStl = 1;\n\
          \n\
          // Mesh sizes (m, converted to model units in the size field). The mesh stage\n\
-         // passes -setnumber h_interface/h_outer (and h_bar_core when the spec sets\n\
-         // it); the defaults only make the script usable on its own.\n\
-         DefineConstant[\n  h_interface = {{{hi}, Name \"Parameters/h_interface\"}},\n  h_outer = {{{ho}, Name \"Parameters/h_outer\"}},\n  h_bar_core = {{0, Name \"Parameters/h_bar_core\"}}\n];\n\
+         // passes -setnumber h_interface/h_outer (and h_bar_core, h_unbonded when\n\
+         // the spec sets them); the defaults only make the script usable on its own.\n\
+         DefineConstant[\n  h_interface = {{{hi}, Name \"Parameters/h_interface\"}},\n  h_outer = {{{ho}, Name \"Parameters/h_outer\"}},\n  h_bar_core = {{0, Name \"Parameters/h_bar_core\"}},\n  h_unbonded = {{0, Name \"Parameters/h_unbonded\"}}\n];\n\
          \n\
          // Specimen dimensions (model units).\n\
          L = {L};\nl_adh = {ladh};\nz_lo = {zlo};\nz_hi = {zhi};\nR = {R};\nr_out = {rout};\n\
@@ -576,7 +576,26 @@ fn geo_size_field(w: &mut String) {
          h_out = h_outer * model_per_m;\n\
          k_grow = (h_out - h_in) / (L / 2 - r_out);\n\
          Field[1] = MathEval;\n\
-         If (h_bar_core > h_interface)\n\
+         If (h_unbonded > h_interface)\n\
+           // Lean unbonded parts: between a band of one bar diameter past the\n\
+           // bonded zone z in [0, l_adh] (the concrete in front of the last ribs\n\
+           // damages up to a rib spacing beyond it) and the bearing face z = L, the\n\
+           // size grows by half the distance to the nearer of the two up to\n\
+           // h_unbonded; there the bar carries no bond and both bodies stay elastic.\n\
+           // The bearing face and the loaded overhang keep their sizes: their\n\
+           // reactions set the solver's force scale (docs/mesh.md, Unbonded\n\
+           // parts). The other terms are those below, combined by the larger\n\
+           // increment.\n\
+           h_unb = h_unbonded * model_per_m;\n\
+           z_band = Max(2 * R, Max(2 * (r_out - R), 2 * h_in));\n\
+           If (h_bar_core > h_interface)\n\
+             h_core = h_bar_core * model_per_m;\n\
+             r_band = R - Max(2 * (r_out - R), 2 * h_in);\n\
+             Field[1].F = Sprintf(\"Min(%.12g, %.12g + Max(Max(%.12g * Max(0, Sqrt(x * x + y * y) - %.12g), Min(%.12g, 0.5 * Max(0, %.12g - Sqrt(x * x + y * y)))), Min(%.12g, 0.5 * Max(0, Min(z - %.12g, %.12g - z)))))\", h_out, h_in, k_grow, r_out, h_core - h_in, r_band, h_unb - h_in, l_adh + z_band, L);\n\
+           Else\n\
+             Field[1].F = Sprintf(\"Min(%.12g, %.12g + Max(%.12g * Max(0, Sqrt(x * x + y * y) - %.12g), Min(%.12g, 0.5 * Max(0, Min(z - %.12g, %.12g - z)))))\", h_out, h_in, k_grow, r_out, h_unb - h_in, l_adh + z_band, L);\n\
+           EndIf\n\
+         ElseIf (h_bar_core > h_interface)\n\
            // A lean bar core: h_interface in a band of two rib heights (at least\n\
            // two elements) under the bar's surface, then growing by half the\n\
            // depth below the band up to h_bar_core: the core stays elastic and\n\

@@ -78,7 +78,7 @@ pub fn gmsh_args(geo: &Path, spec: &MeshSpec, out_msh: &Path) -> Vec<String> {
 /// `geo` and the options that mesh it with `spec`. Options and sizes go
 /// through `-setnumber` (read before the `.geo`, so the `.geo` must not set
 /// the options itself; the sizes are its `DefineConstant`s `h_interface`,
-/// `h_outer` and, when set, `h_bar_core`, m). Not `-string`: gmsh parses
+/// `h_outer` and, when set, `h_bar_core` and `h_unbonded`, m). Not `-string`: gmsh parses
 /// that through one temporary file per user (`~/.gmsh-tmp`, written, read,
 /// removed), so two gmsh runs at once (a study's cases, parallel tests) can
 /// take each other's file or find it gone and mesh with gmsh's default
@@ -91,12 +91,13 @@ fn gmsh_options(geo: &Path, spec: &MeshSpec) -> Vec<String> {
         Optimize::Netgen => (1, 1),
     };
     let mut args = vec![geo.display().to_string()];
-    if let Some(h) = spec.h_bar_core {
-        args.extend([
-            "-setnumber".to_string(),
-            "h_bar_core".into(),
-            format!("{h:e}"),
-        ]);
+    for (name, h) in [
+        ("h_bar_core", spec.h_bar_core),
+        ("h_unbonded", spec.h_unbonded),
+    ] {
+        if let Some(h) = h {
+            args.extend(["-setnumber".to_string(), name.into(), format!("{h:e}")]);
+        }
     }
     for (name, value) in [
         ("Mesh.Algorithm3D", spec.algorithm_3d.gmsh_id().to_string()),

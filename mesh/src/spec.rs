@@ -78,6 +78,9 @@ pub struct RawMeshSpec {
     /// Largest mesh size in the bar's core (length; default: the whole bar at
     /// h_interface).
     pub h_bar_core: Option<RawQuantity>,
+    /// Largest mesh size around the bar's unbonded parts, past the bonded
+    /// zone along z (length; default: as the bonded zone).
+    pub h_unbonded: Option<RawQuantity>,
     /// gmsh 3D algorithm: delaunay | frontal | mmg3d | hxt (default hxt).
     pub algorithm_3d: Option<Algorithm3d>,
     /// true | false | gmsh | netgen | none (default true = gmsh).
@@ -103,6 +106,12 @@ pub struct MeshSpec {
     /// without it keep their cache keys.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub h_bar_core: Option<f64>,
+    /// Largest mesh size around the bar's unbonded parts (the non-adhesive
+    /// zone and the overhangs past a band at the bonded zone's ends), m;
+    /// `None`: sized as the bonded zone. Left out of the serialised spec
+    /// when unset, so that meshes without it keep their cache keys.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub h_unbonded: Option<f64>,
     pub algorithm_3d: Algorithm3d,
     pub optimize: Optimize,
     /// Number of gmsh threads (≥ 1).
@@ -129,6 +138,7 @@ impl Default for MeshSpec {
             h_interface: DEFAULT_H_INTERFACE,
             h_outer: DEFAULT_H_OUTER,
             h_bar_core: None,
+            h_unbonded: None,
             algorithm_3d: Algorithm3d::Hxt,
             optimize: Optimize::Gmsh,
             threads: 1,
@@ -162,6 +172,11 @@ impl RawMeshSpec {
             .as_ref()
             .map(|q| q.to_si(Dim::Length, "mesh.h_bar_core"))
             .transpose()?;
+        let h_unbonded = self
+            .h_unbonded
+            .as_ref()
+            .map(|q| q.to_si(Dim::Length, "mesh.h_unbonded"))
+            .transpose()?;
         let timeout = match &self.timeout {
             Some(q) => q.to_si(Dim::Time, "mesh.timeout")?,
             None => d.timeout,
@@ -181,10 +196,10 @@ impl RawMeshSpec {
                 format!("must be ≥ h_interface ({h_interface} m), got {h_outer} m"),
             ));
         }
-        if let Some(h) = h_bar_core {
-            if h < h_interface {
+        for (key, h) in [("h_bar_core", h_bar_core), ("h_unbonded", h_unbonded)] {
+            if let Some(h) = h.filter(|&h| h < h_interface || h.is_nan()) {
                 return Err(bad(
-                    "h_bar_core",
+                    key,
                     format!("must be ≥ h_interface ({h_interface} m), got {h} m"),
                 ));
             }
@@ -206,6 +221,7 @@ impl RawMeshSpec {
             h_interface,
             h_outer,
             h_bar_core,
+            h_unbonded,
             algorithm_3d: self.algorithm_3d.unwrap_or(d.algorithm_3d),
             optimize,
             threads,
@@ -243,6 +259,24 @@ mod tests {
         // Unset, it is not part of the resolved spec that mesh keys hash.
         let json = serde_json::to_value(MeshSpec::default()).unwrap();
         assert!(json.get("h_bar_core").is_none(), "{json}");
+    }
+
+    /// So is the unbonded parts' size.
+    #[test]
+    fn unbonded_size_is_checked_and_absent_when_unset() {
+        let raw: RawMeshSpec = serde_yaml::from_str("h_unbonded: 0.2 mm").unwrap();
+        let e = raw.resolve().unwrap_err().to_string();
+        assert!(
+            e.contains("mesh.h_unbonded") && e.contains("h_interface"),
+            "{e}"
+        );
+        let raw: RawMeshSpec = serde_yaml::from_str("h_unbonded: 1 s").unwrap();
+        let e = raw.resolve().unwrap_err().to_string();
+        assert!(e.contains("mesh.h_unbonded"), "{e}");
+        let raw: RawMeshSpec = serde_yaml::from_str("h_unbonded: 3 mm").unwrap();
+        assert_eq!(raw.resolve().unwrap().h_unbonded, Some(3e-3));
+        let json = serde_json::to_value(MeshSpec::default()).unwrap();
+        assert!(json.get("h_unbonded").is_none(), "{json}");
     }
 
     /// Unknown keys and out-of-range values are errors naming the key (SPEC §8).

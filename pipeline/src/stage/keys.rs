@@ -13,7 +13,7 @@ impl Stage {
     /// same inputs changes, so old artifacts are not reused.
     fn format(self) -> u32 {
         match self {
-            Stage::Geometry => 3,
+            Stage::Geometry => 4,
             Stage::Mesh => 2,
             Stage::Solve => 12,
             Stage::Post => 2,

@@ -1,0 +1,93 @@
+//! Lean unbonded parts (`mesh.h_unbonded`, issue 14): between a band past
+//! the bonded zone and the bearing face the mesh coarsens along the bar,
+//! while the bonded zone, and so its interface, keeps h_interface.
+
+mod common;
+use common::*;
+use mesh::{mesh_specimen, MeshSpec, Model, Region};
+
+/// d = 8 mm smooth bar in a 40 mm cube bonded over z in [0, 10 mm] at
+/// h_interface = 1 mm: a 4 mm unbonded size takes out over a quarter of
+/// the tets; the bonded interface (area, element count), the specimen's
+/// volume and the sizes in the bonded zone and its band (one diameter)
+/// stay; the tets around the bar between the band and the bearing face
+/// grow. (The coarse bar's
+/// polygonal section gives some of its volume to the concrete.)
+#[test]
+fn unbonded_size_coarsens_past_the_bonded_zone_only() {
+    let d = 0.008;
+    let l_adh = 0.01;
+    let bar: geom::spec::RawBar = serde_yaml::from_str("{kind: smooth, diameter: 8 mm}").unwrap();
+    let specimen: geom::spec::RawSpecimen = serde_yaml::from_str(
+        "{cube_side: 40 mm, adhesive_length: 10 mm, free_overhang: 2 mm, loaded_overhang: 4 mm}",
+    )
+    .unwrap();
+    let (bar, specimen) = geom::spec::resolve(&bar, &specimen).unwrap();
+    let mut meshes = Vec::new();
+    for unbonded in [None, Some(4e-3)] {
+        let dir = scratch(&format!("unbonded-{}", unbonded.is_some()));
+        geom::build_geometry(&bar, &specimen, &dir).unwrap();
+        let spec = MeshSpec {
+            h_interface: 1e-3,
+            h_outer: 6e-3,
+            h_unbonded: unbonded,
+            ..MeshSpec::default()
+        };
+        let report =
+            mesh_specimen(gmsh(), &dir.join("specimen.geo"), &spec, d, l_adh, &dir).unwrap();
+        let model = Model::load(&dir.join(mesh::MODEL_FILE)).unwrap();
+        check_topology(&model);
+        meshes.push((report, model));
+    }
+    let (uniform, lean) = (&meshes[0], &meshes[1]);
+    let tets = |m: &Model| m.tets.len() as f64;
+    assert!(
+        tets(&lean.1) < 0.75 * tets(&uniform.1),
+        "tets {} → {}",
+        tets(&uniform.1),
+        tets(&lean.1)
+    );
+    let rel = |a: f64, b: f64| (a - b).abs() / b;
+    assert!(
+        rel(
+            lean.0.interface_area_adhesive_m2,
+            uniform.0.interface_area_adhesive_m2
+        ) < 1e-3
+    );
+    let volume = |r: &mesh::MeshReport| r.volume_steel_m3 + r.volume_concrete_m3;
+    assert!(rel(volume(&lean.0), volume(&uniform.0)) < 1e-3);
+    let adhesive = |r: &mesh::MeshReport| r.interface_elements_adhesive as f64;
+    assert!(rel(adhesive(&lean.0), adhesive(&uniform.0)) < 0.05);
+    // The largest tet whose centroid lies within 1 mm of the bar's
+    // surface, in the bonded zone and its band, and past the band (8 mm)
+    // by over 8 mm.
+    let sizes = |m: &Model| {
+        let (mut bonded_max, mut unbonded_max) = (0.0f64, 0.0f64);
+        for (i, t) in m.tets.iter().enumerate() {
+            let at = |n: u32| m.nodes[n as usize];
+            let c = t
+                .iter()
+                .fold([0.0; 3], |c, &n| [0, 1, 2].map(|k| c[k] + 0.25 * at(n)[k]));
+            if (c[0].hypot(c[1]) - d / 2.0).abs() > 1e-3 {
+                continue;
+            }
+            if t.iter().all(|&n| (0.0..=l_adh + d).contains(&at(n)[2])) {
+                bonded_max = bonded_max.max(m.tet_size[i]);
+            } else if c[2] > l_adh + d + 8e-3 {
+                unbonded_max = unbonded_max.max(m.tet_size[i]);
+            }
+        }
+        assert!(m.tet_region.contains(&Region::Steel));
+        (bonded_max, unbonded_max)
+    };
+    let (bonded_uniform, unbonded_uniform) = sizes(&uniform.1);
+    let (bonded_lean, unbonded_lean) = sizes(&lean.1);
+    assert!(
+        bonded_lean < 1.15 * bonded_uniform,
+        "largest tet in the bonded zone and band {bonded_uniform} → {bonded_lean}"
+    );
+    assert!(
+        unbonded_lean > 1.5 * unbonded_uniform,
+        "largest tet past the band {unbonded_uniform} → {unbonded_lean}"
+    );
+}
