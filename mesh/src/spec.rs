@@ -78,8 +78,9 @@ pub struct RawMeshSpec {
     /// Largest mesh size in the bar's core (length; default: the whole bar at
     /// h_interface).
     pub h_bar_core: Option<RawQuantity>,
-    /// Largest mesh size around the bar's unbonded parts, past the bonded
-    /// zone along z (length; default: as the bonded zone).
+    /// Largest mesh size along the bar's unbonded part, between a band of
+    /// one diameter past the bonded zone and the bearing face (length;
+    /// default: as the bonded zone).
     pub h_unbonded: Option<RawQuantity>,
     /// gmsh 3D algorithm: delaunay | frontal | mmg3d | hxt (default hxt).
     pub algorithm_3d: Option<Algorithm3d>,
@@ -106,9 +107,10 @@ pub struct MeshSpec {
     /// without it keep their cache keys.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub h_bar_core: Option<f64>,
-    /// Largest mesh size around the bar's unbonded parts (the non-adhesive
-    /// zone and the overhangs past a band at the bonded zone's ends), m;
-    /// `None`: sized as the bonded zone. Left out of the serialised spec
+    /// Largest mesh size along the bar's unbonded part (the non-adhesive
+    /// zone between a band of one diameter past the bonded zone and the
+    /// bearing face, whose reactions set the solver's force scale and keep
+    /// their mesh), m; `None`: sized as the bonded zone. Left out of the serialised spec
     /// when unset, so that meshes without it keep their cache keys.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub h_unbonded: Option<f64>,
