@@ -4,7 +4,7 @@
 
 mod common;
 use common::*;
-use mesh::{mesh_specimen, MeshSpec, Model, Region};
+use mesh::{MeshSpec, Model, Region};
 
 /// d = 16 mm smooth bar in a 40 mm cube at h_interface = 1 mm: a 4 mm core
 /// takes out over 30 % of the steel tets; the interface (element count and area), the
@@ -13,29 +13,18 @@ use mesh::{mesh_specimen, MeshSpec, Model, Region};
 #[test]
 fn bar_core_coarsens_the_interior_only() {
     let d = 0.016;
-    let l_adh = 0.02;
-    let bar: geom::spec::RawBar = serde_yaml::from_str("{kind: smooth, diameter: 16 mm}").unwrap();
-    let specimen: geom::spec::RawSpecimen = serde_yaml::from_str(
-        "{cube_side: 40 mm, adhesive_length: 20 mm, free_overhang: 2 mm, loaded_overhang: 4 mm}",
-    )
-    .unwrap();
-    let (bar, specimen) = geom::spec::resolve(&bar, &specimen).unwrap();
-    let mut meshes = Vec::new();
-    for core in [None, Some(4e-3)] {
-        let dir = scratch(&format!("bar-core-{}", core.is_some()));
-        geom::build_geometry(&bar, &specimen, &dir).unwrap();
-        let spec = MeshSpec {
-            h_interface: 1e-3,
-            h_outer: 6e-3,
-            h_bar_core: core,
-            ..MeshSpec::default()
-        };
-        let report =
-            mesh_specimen(gmsh(), &dir.join("specimen.geo"), &spec, d, l_adh, &dir).unwrap();
-        let model = Model::load(&dir.join(mesh::MODEL_FILE)).unwrap();
-        check_topology(&model);
-        meshes.push((report, model));
-    }
+    let meshes = smooth_meshes(
+        "bar-core",
+        d,
+        0.02,
+        &[
+            MeshSpec::default(),
+            MeshSpec {
+                h_bar_core: Some(4e-3),
+                ..MeshSpec::default()
+            },
+        ],
+    );
     let (uniform, lean) = (&meshes[0], &meshes[1]);
     let steel = |m: &Model| m.tet_region.iter().filter(|r| **r == Region::Steel).count();
     assert!(

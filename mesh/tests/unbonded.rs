@@ -4,7 +4,7 @@
 
 mod common;
 use common::*;
-use mesh::{mesh_specimen, MeshSpec, Model, Region};
+use mesh::{MeshSpec, Model, Region};
 
 /// d = 8 mm smooth bar in a 40 mm cube bonded over z in [0, 10 mm] at
 /// h_interface = 1 mm: a 4 mm unbonded size takes out over a quarter of
@@ -17,28 +17,18 @@ use mesh::{mesh_specimen, MeshSpec, Model, Region};
 fn unbonded_size_coarsens_past_the_bonded_zone_only() {
     let d = 0.008;
     let l_adh = 0.01;
-    let bar: geom::spec::RawBar = serde_yaml::from_str("{kind: smooth, diameter: 8 mm}").unwrap();
-    let specimen: geom::spec::RawSpecimen = serde_yaml::from_str(
-        "{cube_side: 40 mm, adhesive_length: 10 mm, free_overhang: 2 mm, loaded_overhang: 4 mm}",
-    )
-    .unwrap();
-    let (bar, specimen) = geom::spec::resolve(&bar, &specimen).unwrap();
-    let mut meshes = Vec::new();
-    for unbonded in [None, Some(4e-3)] {
-        let dir = scratch(&format!("unbonded-{}", unbonded.is_some()));
-        geom::build_geometry(&bar, &specimen, &dir).unwrap();
-        let spec = MeshSpec {
-            h_interface: 1e-3,
-            h_outer: 6e-3,
-            h_unbonded: unbonded,
-            ..MeshSpec::default()
-        };
-        let report =
-            mesh_specimen(gmsh(), &dir.join("specimen.geo"), &spec, d, l_adh, &dir).unwrap();
-        let model = Model::load(&dir.join(mesh::MODEL_FILE)).unwrap();
-        check_topology(&model);
-        meshes.push((report, model));
-    }
+    let meshes = smooth_meshes(
+        "unbonded",
+        d,
+        l_adh,
+        &[
+            MeshSpec::default(),
+            MeshSpec {
+                h_unbonded: Some(4e-3),
+                ..MeshSpec::default()
+            },
+        ],
+    );
     let (uniform, lean) = (&meshes[0], &meshes[1]);
     let tets = |m: &Model| m.tets.len() as f64;
     assert!(

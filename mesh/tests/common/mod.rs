@@ -276,3 +276,42 @@ pub fn zone_area(m: &Model, zone: InterfaceZone) -> f64 {
         .map(|e| e.area)
         .sum()
 }
+
+/// A smooth bar of diameter `d` (m) in a 40 mm cube bonded over
+/// `l_adh` (m), built and meshed with real gmsh once per spec of `specs`
+/// (at h_interface 1 mm and h_outer 6 mm, each spec's lean-mesh options
+/// set): each mesh's report and topology-checked model.
+pub fn smooth_meshes(
+    name: &str,
+    d: f64,
+    l_adh: f64,
+    specs: &[MeshSpec],
+) -> Vec<(mesh::MeshReport, Model)> {
+    let bar: geom::spec::RawBar =
+        serde_yaml::from_str(&format!("{{kind: smooth, diameter: {} mm}}", d * 1e3)).unwrap();
+    let specimen: geom::spec::RawSpecimen = serde_yaml::from_str(&format!(
+        "{{cube_side: 40 mm, adhesive_length: {} mm, free_overhang: 2 mm, loaded_overhang: 4 mm}}",
+        l_adh * 1e3
+    ))
+    .unwrap();
+    let (bar, specimen) = geom::spec::resolve(&bar, &specimen).unwrap();
+    specs
+        .iter()
+        .enumerate()
+        .map(|(i, lean)| {
+            let dir = scratch(&format!("{name}-{i}"));
+            geom::build_geometry(&bar, &specimen, &dir).unwrap();
+            let spec = MeshSpec {
+                h_interface: 1e-3,
+                h_outer: 6e-3,
+                ..lean.clone()
+            };
+            let report =
+                mesh::mesh_specimen(gmsh(), &dir.join("specimen.geo"), &spec, d, l_adh, &dir)
+                    .unwrap();
+            let model = Model::load(&dir.join(mesh::MODEL_FILE)).unwrap();
+            check_topology(&model);
+            (report, model)
+        })
+        .collect()
+}
