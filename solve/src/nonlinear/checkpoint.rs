@@ -8,6 +8,7 @@ use crate::curve::CurveRow;
 use crate::elements::interface::INTERFACE_POINTS;
 use crate::energy::EnergyRow;
 use crate::fields::ProfileRow;
+use crate::spec::solver::REBUILD_COST_ITERATIONS;
 use mesh::Model;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
@@ -100,8 +101,6 @@ pub struct HierarchyWear {
     replaced_rate: Option<f64>,
     /// Rebuilds for wear in a row that did not pay.
     doublings: u32,
-    /// The wear has passed what a build costs.
-    worn: bool,
 }
 
 /// A rebuild for wear pays when the new hierarchy's first solve needs at
@@ -113,15 +112,8 @@ pub const MAX_WEAR_DOUBLINGS: u32 = 4;
 
 impl HierarchyWear {
     /// Counts a solve of `iterations` that reached `relative_residual`
-    /// with the hierarchy; returns whether the wear so far has passed what
-    /// a build costs (`build_cost` iterations, doubled for each rebuild in
-    /// a row that did not pay).
-    pub(crate) fn after_solve(
-        &mut self,
-        iterations: usize,
-        relative_residual: f64,
-        build_cost: usize,
-    ) -> bool {
+    /// with the hierarchy; returns whether it is now worn.
+    pub(crate) fn after_solve(&mut self, iterations: usize, relative_residual: f64) -> bool {
         let decades = decades_of(relative_residual);
         match self.first {
             None => {
@@ -143,8 +135,13 @@ impl HierarchyWear {
                 }
             }
         }
-        self.worn = self.excess > build_cost << self.doublings;
-        self.worn
+        self.worn()
+    }
+
+    /// The wear has passed what a build costs ([`REBUILD_COST_ITERATIONS`],
+    /// doubled for each rebuild in a row that did not pay).
+    fn worn(&self) -> bool {
+        self.excess > REBUILD_COST_ITERATIONS << self.doublings
     }
 
     /// The wear of a new hierarchy. When the old one is replaced because
@@ -155,7 +152,7 @@ impl HierarchyWear {
             // matrix): the judgement waits for the first solve still.
             return self;
         }
-        let replaced_rate = (self.worn && self.later_decades > 0.0)
+        let replaced_rate = (self.worn() && self.later_decades > 0.0)
             .then(|| self.later_iterations as f64 / self.later_decades);
         Self {
             replaced_rate,
@@ -250,10 +247,10 @@ mod tests {
     use super::*;
 
     /// Solves of `iterations` each reaching `residual` until the wear
-    /// passes a 40-iteration build; returns how many it took.
+    /// passes a build (40 iterations); returns how many it took.
     fn solves_until_worn(wear: &mut HierarchyWear, iterations: usize, residual: f64) -> usize {
         (1..=100)
-            .find(|_| wear.after_solve(iterations, residual, 40))
+            .find(|_| wear.after_solve(iterations, residual))
             .expect("the wear passes the build's cost")
     }
 
@@ -264,13 +261,13 @@ mod tests {
     #[test]
     fn a_rebuild_that_does_not_pay_doubles_the_wear_awaited() {
         let mut wear = HierarchyWear::default();
-        assert!(!wear.after_solve(10, 1e-3, 40));
+        assert!(!wear.after_solve(10, 1e-3));
         // 20 beyond the first each: the third later solve passes 40.
         assert_eq!(solves_until_worn(&mut wear, 30, 1e-3), 3);
         // The new hierarchy's first solve needs as many iterations per
         // decade as the worn one's (10): the rebuild did not pay.
         let mut wear = wear.rebuilt();
-        assert!(!wear.after_solve(30, 1e-3, 40));
+        assert!(!wear.after_solve(30, 1e-3));
         assert_eq!(wear.doublings, 1);
         assert_eq!(solves_until_worn(&mut wear, 50, 1e-3), 5, "80 awaited");
         // A build before any solve (the secant's) keeps the judgement.
@@ -279,7 +276,7 @@ mod tests {
         let mut wear = wear.rebuilt();
         assert!(close(wear.replaced_rate, 50.0 / 3.0));
         // 8 per decade against 16.7: this one paid, the next waits for 40.
-        assert!(!wear.after_solve(24, 1e-3, 40));
+        assert!(!wear.after_solve(24, 1e-3));
         assert_eq!(wear.doublings, 0);
         assert_eq!(solves_until_worn(&mut wear, 45, 1e-3), 2);
     }
@@ -289,11 +286,11 @@ mod tests {
         // First solves of 16 iterations per decade after later ones of 21:
         // no rebuild pays.
         let mut wear = HierarchyWear::default();
-        wear.after_solve(32, 1e-2, 40);
+        wear.after_solve(32, 1e-2);
         for doublings in 1..=6 {
             solves_until_worn(&mut wear, 42, 1e-2);
             wear = wear.rebuilt();
-            wear.after_solve(32, 1e-2, 40);
+            wear.after_solve(32, 1e-2);
             assert_eq!(wear.doublings, doublings.min(MAX_WEAR_DOUBLINGS));
         }
         // 10 beyond the first a solve: 640 iterations wait for 65 solves.
@@ -306,13 +303,13 @@ mod tests {
     #[test]
     fn only_rebuilds_for_wear_are_judged() {
         let mut wear = HierarchyWear::default();
-        wear.after_solve(10, 1e-3, 40);
-        wear.after_solve(0, 0.0, 40);
+        wear.after_solve(10, 1e-3);
+        wear.after_solve(0, 0.0);
         assert_eq!(wear.later_decades, 0.0);
-        wear.after_solve(30, 1e-3, 40);
+        wear.after_solve(30, 1e-3);
         let mut wear = wear.rebuilt();
         assert_eq!(wear.replaced_rate, None);
-        wear.after_solve(30, 1e-3, 40);
+        wear.after_solve(30, 1e-3);
         assert_eq!(wear.doublings, 0);
     }
 }

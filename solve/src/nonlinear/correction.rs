@@ -17,7 +17,7 @@ use super::workspace::{Kept, Workspace};
 use crate::assembly::{Outputs, States, Tangents};
 use crate::laws::TangentKind;
 use crate::linalg::{gmres, pcg, KrylovInfo, LinearError, Preconditioner, SplitMatrix, SymLower};
-use crate::spec::solver::{LinearSolverKind, MultigridRebuild, REBUILD_COST_ITERATIONS};
+use crate::spec::solver::{LinearSolverKind, MultigridRebuild};
 use std::time::Instant;
 
 impl Workspace<'_> {
@@ -218,11 +218,10 @@ impl Workspace<'_> {
     fn worn(&mut self, info: &KrylovInfo) -> bool {
         self.settings.multigrid_rebuild == MultigridRebuild::Amortised
             && matches!(self.lin.kept, Kept::Multigrid { .. })
-            && self.lin.wear.after_solve(
-                info.iterations,
-                info.relative_residual,
-                REBUILD_COST_ITERATIONS,
-            )
+            && self
+                .lin
+                .wear
+                .after_solve(info.iterations, info.relative_residual)
     }
 
     /// GMRES failed with a fresh hierarchy of the symmetric part (which may
