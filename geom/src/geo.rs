@@ -575,7 +575,18 @@ fn geo_size_field(w: &mut String) {
          h_in = h_interface * model_per_m;\n\
          h_out = h_outer * model_per_m;\n\
          k_grow = (h_out - h_in) / (L / 2 - r_out);\n\
-         Field[1] = MathEval;\n\
+         // Each lean part adds an increment over h_interface that is zero where\n\
+         // the part's rule does not apply; the increments combine by the larger.\n\
+         size_increment = Sprintf(\"%.12g * Max(0, Sqrt(x * x + y * y) - %.12g)\", k_grow, r_out);\n\
+         If (h_bar_core > h_interface)\n\
+           // A lean bar core: h_interface in a band of two rib heights (at least\n\
+           // two elements) under the bar's surface, then growing by half the\n\
+           // depth below the band up to h_bar_core: the core stays elastic and\n\
+           // its field smooth (docs/mesh.md, Bar core).\n\
+           h_core = h_bar_core * model_per_m;\n\
+           r_band = R - Max(2 * (r_out - R), 2 * h_in);\n\
+           size_increment = StrCat(\"Max(\", size_increment, Sprintf(\", Min(%.12g, 0.5 * Max(0, %.12g - Sqrt(x * x + y * y))))\", h_core - h_in, r_band));\n\
+         EndIf\n\
          If (h_unbonded > h_interface)\n\
            // Lean unbonded parts: between a band of one bar diameter past the\n\
            // bonded zone z in [0, l_adh] (the concrete in front of the last ribs\n\
@@ -584,28 +595,13 @@ fn geo_size_field(w: &mut String) {
            // h_unbonded; there the bar carries no bond and both bodies stay elastic.\n\
            // The bearing face and the loaded overhang keep their sizes: their\n\
            // reactions set the solver's force scale (docs/mesh.md, Unbonded\n\
-           // parts). The other terms are those below, combined by the larger\n\
-           // increment.\n\
+           // parts).\n\
            h_unb = h_unbonded * model_per_m;\n\
            z_band = Max(2 * R, Max(2 * (r_out - R), 2 * h_in));\n\
-           If (h_bar_core > h_interface)\n\
-             h_core = h_bar_core * model_per_m;\n\
-             r_band = R - Max(2 * (r_out - R), 2 * h_in);\n\
-             Field[1].F = Sprintf(\"Min(%.12g, %.12g + Max(Max(%.12g * Max(0, Sqrt(x * x + y * y) - %.12g), Min(%.12g, 0.5 * Max(0, %.12g - Sqrt(x * x + y * y)))), Min(%.12g, 0.5 * Max(0, Min(z - %.12g, %.12g - z)))))\", h_out, h_in, k_grow, r_out, h_core - h_in, r_band, h_unb - h_in, l_adh + z_band, L);\n\
-           Else\n\
-             Field[1].F = Sprintf(\"Min(%.12g, %.12g + Max(%.12g * Max(0, Sqrt(x * x + y * y) - %.12g), Min(%.12g, 0.5 * Max(0, Min(z - %.12g, %.12g - z)))))\", h_out, h_in, k_grow, r_out, h_unb - h_in, l_adh + z_band, L);\n\
-           EndIf\n\
-         ElseIf (h_bar_core > h_interface)\n\
-           // A lean bar core: h_interface in a band of two rib heights (at least\n\
-           // two elements) under the bar's surface, then growing by half the\n\
-           // depth below the band up to h_bar_core: the core stays elastic and\n\
-           // its field smooth (docs/mesh.md, Bar core).\n\
-           h_core = h_bar_core * model_per_m;\n\
-           r_band = R - Max(2 * (r_out - R), 2 * h_in);\n\
-           Field[1].F = Sprintf(\"Min(%.12g, %.12g + %.12g * Max(0, Sqrt(x * x + y * y) - %.12g) + Min(%.12g, 0.5 * Max(0, %.12g - Sqrt(x * x + y * y))))\", h_out, h_in, k_grow, r_out, h_core - h_in, r_band);\n\
-         Else\n\
-           Field[1].F = Sprintf(\"Min(%.12g, %.12g + %.12g * Max(0, Sqrt(x * x + y * y) - %.12g))\", h_out, h_in, k_grow, r_out);\n\
+           size_increment = StrCat(\"Max(\", size_increment, Sprintf(\", Min(%.12g, 0.5 * Max(0, Min(z - %.12g, %.12g - z))))\", h_unb - h_in, l_adh + z_band, L));\n\
          EndIf\n\
+         Field[1] = MathEval;\n\
+         Field[1].F = StrCat(Sprintf(\"Min(%.12g, %.12g + \", h_out, h_in), size_increment, \")\");\n\
          Background Field = 1;\n\
          // Only the field sets sizes.\n\
          Mesh.MeshSizeFromPoints = 0;\n\
