@@ -283,16 +283,11 @@ impl Workspace<'_> {
                     Err(e) => return rec.failed(k, e),
                 }
             }
-            let reaction = self.reaction_norm();
             let rnorm = norm(&r);
             if !rnorm.is_finite() {
                 return rec.failed(k, StepFailure::NonFiniteResidual);
             }
-            // Once the specimen has unloaded (parts separated, the bar
-            // pulled free) the reactions are round-off; the criterion then
-            // refers to a share of the largest load instead.
-            let reaction = reaction.max(self.force_floor);
-            let scale = if reaction > 0.0 { reaction } else { 1.0 };
+            let scale = self.force_scale();
             rec.history.push(rnorm / scale);
             // The predictor (k = 0) counts: at a threshold the first correction
             // can cross to the worse side of the cycle (R1 with δ_s = 0.02 and

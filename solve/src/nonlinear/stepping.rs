@@ -1544,8 +1544,7 @@ fn in_balance(
     )?;
     let mut r = vec![0.0; system.dofs().n_free()];
     ws.residual(&mut r);
-    let reaction = ws.reaction_norm().max(ws.force_floor);
-    let scale = if reaction > 0.0 { reaction } else { 1.0 };
+    let scale = ws.force_scale();
     let tolerance = ws.settings.residual_tolerance;
     let held = match control {
         Control::Displacement => true,

@@ -100,9 +100,18 @@ impl Workspace<'_> {
         residual(self.system.dofs(), &self.f_int, r);
     }
 
-    /// ‖f_int‖ over the constrained DOFs: the reactions, the force scale.
-    pub(crate) fn reaction_norm(&self) -> f64 {
-        reaction_norm(self.system, &self.f_int)
+    /// The residual criterion's force scale, N: the norm of the reactions
+    /// of the current `f_int`, not below `force_floor` (once the specimen
+    /// has unloaded, parts separated or the bar pulled free, the reactions
+    /// are round-off and a share of the largest load stands in), 1 where
+    /// both are zero.
+    pub(crate) fn force_scale(&self) -> f64 {
+        let reaction = reaction_norm(self.system, &self.f_int).max(self.force_floor);
+        if reaction > 0.0 {
+            reaction
+        } else {
+            1.0
+        }
     }
 }
 
@@ -113,7 +122,7 @@ pub(crate) fn residual(dofs: &DofMap, f_int: &[f64], r: &mut [f64]) {
 }
 
 /// ‖f_int‖ over the constrained DOFs: the reactions, the force scale.
-pub(crate) fn reaction_norm(system: &System, f_int: &[f64]) -> f64 {
+fn reaction_norm(system: &System, f_int: &[f64]) -> f64 {
     let dofs = system.dofs();
     (0..dofs.n_total())
         .filter(|&d| dofs.free_index(d).is_none())

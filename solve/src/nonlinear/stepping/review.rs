@@ -11,7 +11,7 @@ use crate::nonlinear::control::ControlMode;
 use crate::nonlinear::failure::{RegimeChanges, StepFailure};
 use crate::nonlinear::newton::Attempt;
 use crate::nonlinear::report::{SolveError, WallTimes};
-use crate::nonlinear::workspace::{reaction_norm, residual, Workspace};
+use crate::nonlinear::workspace::{residual, Workspace};
 use crate::spec::solver::CurveError;
 use rayon::prelude::*;
 use std::time::Instant;
@@ -337,8 +337,8 @@ impl Driver<'_> {
 /// converged displacement `u` when every concrete point (and IMPL-EX
 /// interface point) takes the damage its implicit history reached in the
 /// step instead of the extrapolated one (what an implicit Newton
-/// iteration would see there), relative to the reaction like the force
-/// criterion. `explicit`: the tets integrated explicitly for the whole
+/// iteration would see there), over the force criterion's scale
+/// ([`Workspace::force_scale`]). `explicit`: the tets integrated explicitly for the whole
 /// run (see `release_retried`). Overwrites `scratch` and the
 /// workspace's trial states and internal forces (see
 /// `Driver::extrapolation_error`, which keeps the step's).
@@ -369,8 +369,7 @@ fn implicit_residual(
     )?;
     let mut r = vec![0.0; system.dofs().n_free()];
     residual(system.dofs(), &ws.f_int, &mut r);
-    let reaction = reaction_norm(system, &ws.f_int);
-    Ok(norm(&r) / if reaction > 0.0 { reaction } else { 1.0 })
+    Ok(norm(&r) / ws.force_scale())
 }
 
 /// How far `p` lies from the chord `a`–`b` (scaled axes: FED, σ_mb), as
