@@ -160,7 +160,7 @@ fn convergence_tables_written() {
     let lines: Vec<&str> = text.lines().collect();
     assert_eq!(
         lines[0],
-        "quantity,h_mm,dofs,value,rel_error_vs_extrapolated,gci,wall_time_s"
+        "quantity,h_mm,dofs,value,rel_error_vs_extrapolated,gci,uncertainty,wall_time_s"
     );
     assert_eq!(lines.len(), 1 + 8);
     let first: Vec<&str> = lines[1].split(',').collect();
@@ -174,14 +174,23 @@ fn convergence_tables_written() {
         first[5].parse::<f64>().unwrap(),
         studies[0].triplets[0].gci_fine.unwrap()
     );
-    assert_eq!(first[6], "10");
+    // An exact second-order series: the least-squares uncertainty is
+    // 1.25 × the finest grid's error relative to its value.
+    let u: f64 = first[6].parse().unwrap();
+    let exact = 1.25 * (f(0.4e-3) - 9.0) / f(0.4e-3);
+    assert!((u - exact).abs() < 1e-6 * exact, "{u} against {exact}");
+    assert_eq!(first[7], "10");
     // Coarsest grid: no GCI.
     assert_eq!(lines[4].split(',').nth(5), Some(""));
 
     let md_text = std::fs::read_to_string(&md).unwrap();
     assert!(md_text.contains(
-        "| quantity | h_mm | dofs | value | rel_error_vs_extrapolated | gci | wall_time_s |"
+        "| quantity | h_mm | dofs | value | rel_error_vs_extrapolated | gci | uncertainty | wall_time_s |"
     ));
+    assert!(
+        md_text.contains("| peak_bond_stress_MPa | a h^p") && md_text.contains("Eça & Hoekstra"),
+        "{md_text}"
+    );
     assert!(
         md_text.contains("| peak_bond_stress_MPa | 0.4 / 0.8 / 1.2 | monotonic | 2 | 9 |"),
         "{md_text}"

@@ -95,8 +95,9 @@ fn sweep_shares_upstream_stages_and_tabulates() {
     std::fs::remove_dir_all(&work).unwrap();
 }
 
-/// Issue 6: a convergence study over three mesh sizes writes the observed
-/// order / Richardson / GCI tables.
+/// Issue 6: a convergence study over four mesh sizes writes the observed
+/// order / Richardson / GCI tables and the least-squares uncertainty of
+/// every grid.
 #[test]
 fn convergence_study_writes_gci_tables() {
     let work = work_dir("convergence");
@@ -114,8 +115,19 @@ fn convergence_study_writes_gci_tables() {
         md.contains("peak_bond_stress") && md.contains("GCI") || md.contains("gci"),
         "{md}"
     );
+    assert!(md.contains("Uncertainty from all grids"), "{md}");
     let csv = std::fs::read_to_string(work.join("tiny-convergence/convergence.csv")).unwrap();
-    assert!(csv.lines().count() >= 4, "{csv}");
+    assert!(csv.lines().count() >= 5, "{csv}");
+    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    let column = header.iter().position(|c| *c == "uncertainty").unwrap();
+    // The finest grid's first-peak line carries a finite, non-negative
+    // uncertainty.
+    let finest = csv
+        .lines()
+        .find(|l| l.starts_with("first_peak_bond_stress,1.75,"))
+        .unwrap_or_else(|| panic!("{csv}"));
+    let u: f64 = finest.split(',').nth(column).unwrap().parse().unwrap();
+    assert!(u.is_finite() && u >= 0.0, "{finest}");
     std::fs::remove_dir_all(&work).unwrap();
 }
 

@@ -16,6 +16,7 @@
 //! here the equation is solved as written above and a series without a
 //! positive solution is reported as divergent instead.
 
+use super::uncertainty::{least_squares_uncertainty, LeastSquaresEstimate};
 use super::PostError;
 
 /// Safety factor of the GCI for studies with three or more grids (Roache;
@@ -110,6 +111,9 @@ pub struct ConvergenceStudy {
     pub grids: Vec<GridResult>,
     /// `triplets[i]` uses grids i, i+1, i+2; `triplets[0]` is the finest.
     pub triplets: Vec<TripletEstimate>,
+    /// The least-squares uncertainty of every grid (`uncertainty` module),
+    /// from four grids on; its `uncertainty` follows `grids`.
+    pub least_squares: Option<LeastSquaresEstimate>,
 }
 
 /// One line of a convergence table.
@@ -125,6 +129,8 @@ pub struct ConvergenceRow {
     /// grid of; for the second-coarsest grid the coarsest triplet's
     /// `gci_medium`; none for the coarsest grid.
     pub gci: Option<f64>,
+    /// U_i/|φ_i| of the least-squares estimate (four grids or more).
+    pub uncertainty: Option<f64>,
     /// s
     pub wall_time: Option<f64>,
 }
@@ -158,6 +164,10 @@ impl ConvergenceStudy {
                         .filter(|e| *e != 0.0)
                         .map(|e| ((g.value - e) / e).abs()),
                     gci,
+                    uncertainty: self
+                        .least_squares
+                        .as_ref()
+                        .and_then(|e| e.relative(i, g.value)),
                     wall_time: g.wall_time,
                 }
             })
@@ -211,6 +221,7 @@ pub fn convergence_study(
         .map_err(|e| err(e.to_string()))?;
     Ok(ConvergenceStudy {
         quantity: quantity.to_string(),
+        least_squares: least_squares_uncertainty(&sorted),
         grids: sorted,
         triplets,
     })

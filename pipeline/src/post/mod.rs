@@ -33,6 +33,7 @@ mod fsutil;
 mod plot;
 mod summary;
 mod table;
+mod uncertainty;
 
 pub use convergence::{
     convergence_study, three_grid_estimate, ConvergenceKind, ConvergenceRow, ConvergenceStudy,
@@ -52,5 +53,7 @@ pub use summary::{
 };
 pub use table::{
     convergence_markdown, convergence_order_table, convergence_table, parameters_label,
-    study_table, value_label, write_convergence_tables, write_study_tables, Cell, StudyCase, Table,
+    study_table, uncertainty_table, value_label, write_convergence_tables, write_study_tables,
+    Cell, StudyCase, Table,
 };
+pub use uncertainty::{least_squares_uncertainty, ErrorFit, LeastSquaresEstimate};

@@ -367,7 +367,8 @@ pub fn write_study_tables(cases: &[StudyCase], csv: &Path, md: &Path) -> Result<
 }
 
 /// Per-grid lines of every quantity: quantity, h (mm), DOFs, value, relative
-/// error against the finest-triplet Richardson extrapolation, GCI, wall time (s).
+/// error against the finest-triplet Richardson extrapolation, GCI, the
+/// least-squares uncertainty (relative), wall time (s).
 pub fn convergence_table(studies: &[ConvergenceStudy]) -> Table {
     let columns = [
         "quantity",
@@ -376,6 +377,7 @@ pub fn convergence_table(studies: &[ConvergenceStudy]) -> Table {
         "value",
         "rel_error_vs_extrapolated",
         "gci",
+        "uncertainty",
         "wall_time_s",
     ]
     .map(String::from)
@@ -390,6 +392,7 @@ pub fn convergence_table(studies: &[ConvergenceStudy]) -> Table {
                 Cell::Num(r.value),
                 r.rel_error_vs_extrapolated.into(),
                 r.gci.into(),
+                r.uncertainty.into(),
                 r.wall_time.into(),
             ]);
         }
@@ -432,6 +435,49 @@ pub fn convergence_order_table(studies: &[ConvergenceStudy]) -> Table {
     Table { columns, rows }
 }
 
+/// One line per quantity with four grids or more: the least-squares fit the
+/// uncertainty comes from, its order, extrapolated value, standard
+/// deviation, data range, safety factor and the finest grid's uncertainty
+/// (absolute and relative).
+pub fn uncertainty_table(studies: &[ConvergenceStudy]) -> Table {
+    let columns = [
+        "quantity",
+        "fit",
+        "order_p",
+        "extrapolated",
+        "std_dev",
+        "data_range",
+        "safety_factor",
+        "u_finest",
+        "u_finest_rel",
+    ]
+    .map(String::from)
+    .to_vec();
+    let rows = studies
+        .iter()
+        .filter_map(|s| {
+            let e = s.least_squares.as_ref()?;
+            let fit = format!(
+                "{}{}",
+                e.fit.as_str(),
+                if e.weighted { ", weighted" } else { "" }
+            );
+            Some(vec![
+                Cell::Text(s.quantity.clone()),
+                Cell::Text(fit),
+                e.order.into(),
+                Cell::Num(e.extrapolated),
+                Cell::Num(e.standard_deviation),
+                Cell::Num(e.data_range),
+                Cell::Num(e.safety_factor),
+                Cell::Num(e.uncertainty[0]),
+                e.relative(0, s.grids[0].value).into(),
+            ])
+        })
+        .collect();
+    Table { columns, rows }
+}
+
 /// Writes [`convergence_table`] as CSV, and a Markdown file holding both the
 /// per-grid table and [`convergence_order_table`].
 pub fn write_convergence_tables(
@@ -443,16 +489,32 @@ pub fn write_convergence_tables(
     write_atomic(md, convergence_markdown(studies).as_bytes())
 }
 
-/// The Markdown of [`write_convergence_tables`]: the per-grid table and
-/// [`convergence_order_table`], each under its heading.
+/// The Markdown of [`write_convergence_tables`]: the per-grid table,
+/// [`convergence_order_table`] and, from four grids on,
+/// [`uncertainty_table`], each under its heading.
 pub fn convergence_markdown(studies: &[ConvergenceStudy]) -> String {
-    format!(
-        "## Grids\n\nErrors and GCI are relative; the error is against the Richardson \
-         extrapolation of the three finest grids.\n\n{}\n## Observed order and \
+    let mut markdown = format!(
+        "## Grids\n\nErrors, GCI and uncertainty are relative; the error is against the \
+         Richardson extrapolation of the three finest grids, the uncertainty is the \
+         least-squares estimate of all grids (below).\n\n{}\n## Observed order and \
          extrapolation (Celik et al. 2008, safety factor 1.25)\n\n{}",
         convergence_table(studies).to_markdown(),
         convergence_order_table(studies).to_markdown()
-    )
+    );
+    let uncertainty = uncertainty_table(studies);
+    if !uncertainty.rows.is_empty() {
+        markdown.push_str(&format!(
+            "\n## Uncertainty from all grids (least squares after Eça & Hoekstra 2014)\n\n\
+             The fit of the error estimate, its order p (of the fit a h^p, blank where no \
+             positive order fits; a fixed-order fit is taken where p < 0.5), the value \
+             at h = 0, the fit's standard \
+             deviation σ, the data range Δ, the safety factor (1.25 where \
+             0.5 ≤ p < 2.1 and σ < Δ, 3 otherwise) and the finest grid's \
+             uncertainty U, in the quantity's unit and relative.\n\n{}",
+            uncertainty.to_markdown()
+        ));
+    }
+    markdown
 }
 
 #[cfg(test)]
