@@ -308,9 +308,14 @@ fn convergence(
     let series: Vec<_> = studies
         .iter()
         .map(post::ErrorTimeSeries::from_study)
+        .chain(
+            studies
+                .iter()
+                .map(post::ErrorTimeSeries::uncertainty_from_study),
+        )
         .filter(|s| !s.points.is_empty())
         .collect();
-    // A series whose triplets all diverged has no error to plot; the
+    // Three grids whose triplet diverged have no error to plot; the
     // tables say why.
     if !series.is_empty() {
         post::error_vs_time_plot(

@@ -91,6 +91,20 @@ impl ErrorTimeSeries {
                 .collect(),
         }
     }
+
+    /// The least-squares uncertainty U/|φ| (four grids or more) versus
+    /// wall time: an error bar also for series whose triplets give no
+    /// extrapolation.
+    pub fn uncertainty_from_study(study: &super::ConvergenceStudy) -> Self {
+        ErrorTimeSeries {
+            label: format!("U: {}", study.quantity),
+            points: study
+                .rows()
+                .iter()
+                .filter_map(|r| Some((r.wall_time?, r.uncertainty?)))
+                .collect(),
+        }
+    }
 }
 
 // ---------------------------------------------------------------- fonts --
@@ -674,7 +688,7 @@ where
     chart
         .configure_mesh()
         .x_desc("Wall time (s)")
-        .y_desc("Relative error (–)")
+        .y_desc("Relative error, uncertainty U (–)")
         .axis_desc_style((FONT_FAMILY, AXIS_TITLE))
         .label_style((FONT_FAMILY, TICK_LABEL))
         .x_label_formatter(&log_tick)
