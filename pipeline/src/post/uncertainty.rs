@@ -123,24 +123,19 @@ pub fn least_squares_uncertainty(grids: &[GridResult]) -> Option<LeastSquaresEst
         .filter_map(|(weighted, w)| unknown_order_fit(&x, &phi, w, *weighted))
         .min_by(|a, b| a.0.standard_deviation.total_cmp(&b.0.standard_deviation))?;
     let kept = if order < 0.5 {
-        let mut fixed = Vec::new();
-        for (weighted, w) in weightings {
-            fixed.extend(fixed_order_fit(&x, &phi, w, weighted, ErrorFit::FirstOrder));
-            fixed.extend(fixed_order_fit(
-                &x,
-                &phi,
-                w,
-                weighted,
-                ErrorFit::SecondOrder,
-            ));
-            fixed.extend(fixed_order_fit(
-                &x,
-                &phi,
-                w,
-                weighted,
-                ErrorFit::FirstAndSecondOrder,
-            ));
-        }
+        let kinds = [
+            ErrorFit::FirstOrder,
+            ErrorFit::SecondOrder,
+            ErrorFit::FirstAndSecondOrder,
+        ];
+        let fixed: Vec<Fit> = weightings
+            .iter()
+            .flat_map(|(weighted, w)| {
+                kinds
+                    .iter()
+                    .filter_map(|&kind| fixed_order_fit(&x, &phi, w, *weighted, kind))
+            })
+            .collect();
         fixed
             .into_iter()
             .min_by(|a, b| a.standard_deviation.total_cmp(&b.standard_deviation))?
