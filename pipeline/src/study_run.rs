@@ -269,6 +269,10 @@ const CONVERGENCE_QUANTITIES: [(&str, &str); 5] = [
     ("energy", "/curve/energy"),
 ];
 
+/// The quantities of [`CONVERGENCE_QUANTITIES`] that may jump from one
+/// point of the curve to another between grids.
+const JUMPING_QUANTITIES: [&str; 2] = ["peak_bond_stress", "fed_at_peak"];
+
 /// convergence.{csv,md}, curve_distances.csv and the error-against-time
 /// plot of a convergence study's grids (size, summary.json) and curves.
 fn convergence(
@@ -305,13 +309,20 @@ fn convergence(
         distances.to_markdown()
     );
     crate::store::write_atomic(&out.join("convergence.md"), markdown.as_bytes())?;
-    let series: Vec<_> = studies
+    // The largest σ_mb and its FED sit at the adhesion peak on some grids
+    // and at the end of the curve on others: their "errors" compare
+    // different points, so they stay in the tables and out of the plot.
+    let plotted: Vec<&ConvergenceStudy> = studies
         .iter()
-        .map(post::ErrorTimeSeries::from_study)
+        .filter(|s| !JUMPING_QUANTITIES.contains(&s.quantity.as_str()))
+        .collect();
+    let series: Vec<_> = plotted
+        .iter()
+        .map(|s| post::ErrorTimeSeries::from_study(s))
         .chain(
-            studies
+            plotted
                 .iter()
-                .map(post::ErrorTimeSeries::uncertainty_from_study),
+                .map(|s| post::ErrorTimeSeries::uncertainty_from_study(s)),
         )
         .filter(|s| !s.points.is_empty())
         .collect();
