@@ -230,8 +230,9 @@ class StudyResult:
 
     @property
     def convergence(self) -> Optional[pd.DataFrame]:
-        """A convergence study's `convergence.csv` (observed order,
-        extrapolated value, GCI per quantity), else None."""
+        """A convergence study's `convergence.csv` (per quantity and grid:
+        error against the Richardson value, GCI, least-squares
+        uncertainty), else None."""
         path = self.directory / "convergence.csv"
         return pd.read_csv(path) if path.is_file() else None
 
