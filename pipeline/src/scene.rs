@@ -212,7 +212,7 @@ impl RawScene {
         check_name(&self.name).map_err(SectionError::Name)?;
         let (bar, geometry) = geom::spec::resolve(&self.bar, &self.specimen)?;
         let materials = self.materials.resolve()?;
-        let solver = self.solver.resolve()?;
+        let solver = self.solver_for(&materials).resolve()?;
         averaging_is_staggered(&materials, &solver)?;
         Ok(Scene {
             name: self.name.clone(),
@@ -228,6 +228,24 @@ impl RawScene {
             outputs: self.outputs.resolve()?,
             written: serde_json::Value::Null,
         })
+    }
+}
+
+impl RawScene {
+    /// The solver section as written, with IMPL-EX concrete where a
+    /// gradient-enhanced damage leaves the integration unset: that is the
+    /// only integration it runs with, so the default follows it; an
+    /// integration written out is kept (and refused below if implicit).
+    fn solver_for(&self, materials: &solve::spec::materials::Materials) -> RawSolver {
+        use solve::spec::materials::ConcreteModel;
+        use solve::spec::solver::ConcreteIntegration;
+        let mut solver = self.solver.clone();
+        let averaged = matches!(materials.concrete,
+            ConcreteModel::Mazars(m) if m.nonlocal_length.is_some());
+        if averaged && solver.concrete_integration.is_none() {
+            solver.concrete_integration = Some(ConcreteIntegration::ImplEx);
+        }
+        solver
     }
 }
 
@@ -255,10 +273,11 @@ fn averaging_is_staggered(
 mod tests {
     use super::*;
 
-    /// A gradient-enhanced damage without IMPL-EX concrete is refused
-    /// naming both keys.
+    /// A gradient-enhanced damage with implicit concrete is refused naming
+    /// both keys; with the integration unset it takes IMPL-EX.
     #[test]
     fn nonlocal_length_needs_impl_ex() {
+        use solve::spec::solver::ConcreteIntegration;
         let path = Path::new("s.yaml");
         let set = |extra: &[&str]| {
             let mut sets = vec![
@@ -268,13 +287,26 @@ mod tests {
             sets.extend(extra.iter().map(|s| s.to_string()));
             Scene::from_yaml(SCENE, path, &sets)
         };
-        let err = set(&[]).unwrap_err().to_string();
+        let err = set(&["solver.concrete_integration=implicit"])
+            .unwrap_err()
+            .to_string();
         assert!(
             err.contains("materials.concrete.nonlocal_length")
                 && err.contains("solver.concrete_integration: impl_ex"),
             "{err}"
         );
         assert!(set(&["solver.concrete_integration=impl_ex"]).is_ok());
+        // Left unset, the integration follows the averaging.
+        let scene = set(&[]).unwrap();
+        assert_eq!(
+            scene.solver.concrete_integration,
+            ConcreteIntegration::ImplEx
+        );
+        let local = Scene::from_yaml(SCENE, Path::new("s.yaml"), &[]).unwrap();
+        assert_eq!(
+            local.solver.concrete_integration,
+            ConcreteIntegration::Implicit
+        );
     }
 
     const SCENE: &str = "name: s\nbar: {kind: smooth, diameter: 8 mm}\n";
