@@ -221,7 +221,10 @@ pub fn convergence_study(
         .map_err(|e| err(e.to_string()))?;
     Ok(ConvergenceStudy {
         quantity: quantity.to_string(),
-        least_squares: least_squares_uncertainty(&sorted),
+        least_squares: least_squares_uncertainty(
+            &sorted.iter().map(|g| g.h).collect::<Vec<_>>(),
+            &sorted.iter().map(|g| g.value).collect::<Vec<_>>(),
+        ),
         grids: sorted,
         triplets,
     })

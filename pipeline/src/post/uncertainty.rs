@@ -23,7 +23,6 @@
 //!   misses the data by more than their spread)
 //!   U_i = 3 σ/Δ (ε_i + σ + |φ_i − fit_i|).
 
-use super::convergence::GridResult;
 use nalgebra::{DMatrix, DVector};
 
 /// Range of orders searched for in the fit of unknown order.
@@ -97,16 +96,15 @@ struct Fit {
     standard_deviation: f64,
 }
 
-/// The estimate for grids of distinct positive sizes and finite values;
-/// None with fewer than four grids (the fit of unknown order has three
-/// parameters and needs one grid more to measure its scatter).
-pub fn least_squares_uncertainty(grids: &[GridResult]) -> Option<LeastSquaresEstimate> {
-    let n = grids.len();
-    if n < 4 {
+/// The estimate for grids of distinct positive sizes `h` and finite
+/// values `phi` (the same length); None with fewer than four grids (the
+/// fit of unknown order has three parameters and needs one grid more to
+/// measure its scatter).
+pub fn least_squares_uncertainty(h: &[f64], phi: &[f64]) -> Option<LeastSquaresEstimate> {
+    let n = h.len();
+    if n < 4 || phi.len() != n {
         return None;
     }
-    let h: Vec<f64> = grids.iter().map(|g| g.h).collect();
-    let phi: Vec<f64> = grids.iter().map(|g| g.value).collect();
     let max = phi.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
     let min = phi.iter().cloned().fold(f64::INFINITY, f64::min);
     let data_range = (max - min) / (n - 1) as f64;
@@ -120,7 +118,7 @@ pub fn least_squares_uncertainty(grids: &[GridResult]) -> Option<LeastSquaresEst
 
     let (fitted, order) = weightings
         .iter()
-        .filter_map(|(weighted, w)| unknown_order_fit(&x, &phi, w, *weighted))
+        .filter_map(|(weighted, w)| unknown_order_fit(&x, phi, w, *weighted))
         .min_by(|a, b| a.0.standard_deviation.total_cmp(&b.0.standard_deviation))?;
     let kept = if order < 0.5 {
         let kinds = [
@@ -133,7 +131,7 @@ pub fn least_squares_uncertainty(grids: &[GridResult]) -> Option<LeastSquaresEst
             .flat_map(|(weighted, w)| {
                 kinds
                     .iter()
-                    .filter_map(|&kind| fixed_order_fit(&x, &phi, w, *weighted, kind))
+                    .filter_map(|&kind| fixed_order_fit(&x, phi, w, *weighted, kind))
             })
             .collect();
         fixed
