@@ -251,7 +251,9 @@ pub fn collect(study: &Study, work: &Path, out: &Path, printer: &Printer) -> Res
             .zip(&curves)
             .map(|((h, _), (_, rows))| (*h, rows.as_slice()))
             .collect();
-        convergence(&grids, &grid_curves, out)?;
+        for line in convergence(&grids, &grid_curves, out)? {
+            printer.line(&line);
+        }
     }
     printer.line(&format!("study tables and plots: {}", out.display()));
     Ok(())
@@ -274,12 +276,13 @@ const CONVERGENCE_QUANTITIES: [(&str, &str); 5] = [
 const JUMPING_QUANTITIES: [&str; 2] = ["peak_bond_stress", "fed_at_peak"];
 
 /// convergence.{csv,md}, curve_distances.csv and the error-against-time
-/// plot of a convergence study's grids (size, summary.json) and curves.
+/// plot of a convergence study's grids (size, summary.json) and curves;
+/// returns a line per plotted quantity with the finest grid's error.
 fn convergence(
     grids: &[(f64, serde_json::Value)],
     curves: &[(f64, &[CurveRow])],
     out: &Path,
-) -> Result<()> {
+) -> Result<Vec<String>> {
     let quantity = |pointer: &str| -> Vec<GridResult> {
         grids
             .iter()
@@ -335,7 +338,32 @@ fn convergence(
             &out.join("error_vs_time.svg"),
         )?;
     }
-    Ok(())
+    Ok(plotted.iter().map(|s| finest_error_line(s)).collect())
+}
+
+/// "quantity on h = … mm: GCI …, U …" for the finest grid of a study,
+/// saying what is missing where an estimate is.
+fn finest_error_line(study: &ConvergenceStudy) -> String {
+    let finest = &study.rows()[0];
+    let percent = |x: Option<f64>| match x {
+        None => "none".to_string(),
+        Some(x) if 100.0 * x >= 0.01 => format!("{:.3} %", 100.0 * x),
+        Some(x) => format!("{:.1e} %", 100.0 * x),
+    };
+    let celik = match finest.gci {
+        Some(_) => format!("GCI {}", percent(finest.gci)),
+        None => format!("no GCI ({})", study.finest().kind.as_str()),
+    };
+    let fit = study.least_squares.as_ref().map_or(String::new(), |e| {
+        format!(" ({}, F_s {})", e.fit.as_str(), e.safety_factor)
+    });
+    let h_mm = format!("{:.4}", finest.h * 1e3);
+    format!(
+        "convergence: {} on h = {} mm: {celik}; uncertainty U {}{fit}",
+        study.quantity,
+        h_mm.trim_end_matches('0').trim_end_matches('.'),
+        percent(finest.uncertainty),
+    )
 }
 
 /// For each grid but the finest: its size, the next finer one's (mm) and

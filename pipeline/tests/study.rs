@@ -102,7 +102,7 @@ fn sweep_shares_upstream_stages_and_tabulates() {
 fn convergence_study_writes_gci_tables() {
     let work = work_dir("convergence");
     let w = work.to_str().unwrap();
-    ok(ribbar().args([
+    let printed = ok(ribbar().args([
         "study",
         "tests/data/tiny-convergence.yaml",
         "--work",
@@ -116,6 +116,12 @@ fn convergence_study_writes_gci_tables() {
         "{md}"
     );
     assert!(md.contains("Uncertainty from all grids"), "{md}");
+    // The run says each plotted quantity's error on the finest grid.
+    assert!(
+        printed.contains("convergence: first_peak_bond_stress on h = 1.75 mm: GCI")
+            && printed.contains("uncertainty U"),
+        "{printed}"
+    );
     let csv = std::fs::read_to_string(work.join("tiny-convergence/convergence.csv")).unwrap();
     assert!(csv.lines().count() >= 5, "{csv}");
     let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
