@@ -229,9 +229,7 @@ impl RawScene {
             written: serde_json::Value::Null,
         })
     }
-}
 
-impl RawScene {
     /// The solver section as written, with IMPL-EX concrete where a
     /// gradient-enhanced damage leaves the integration unset: that is the
     /// only integration it runs with, so the default follows it; an

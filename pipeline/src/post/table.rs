@@ -478,8 +478,8 @@ pub fn uncertainty_table(studies: &[ConvergenceStudy]) -> Table {
     Table { columns, rows }
 }
 
-/// Writes [`convergence_table`] as CSV, and a Markdown file holding both the
-/// per-grid table and [`convergence_order_table`].
+/// Writes [`convergence_table`] as CSV, and the Markdown of
+/// [`convergence_markdown`].
 pub fn write_convergence_tables(
     studies: &[ConvergenceStudy],
     csv: &Path,
@@ -507,10 +507,9 @@ pub fn convergence_markdown(studies: &[ConvergenceStudy]) -> String {
             "\n## Uncertainty from all grids (least squares after Eça & Hoekstra 2014)\n\n\
              The fit of the error estimate, its order p (of the fit a h^p, blank where no \
              positive order fits; a fixed-order fit is taken where p < 0.5), the value \
-             at h = 0, the fit's standard \
-             deviation σ, the data range Δ, the safety factor (1.25 where \
-             0.5 ≤ p < 2.1 and σ < Δ, 3 otherwise) and the finest grid's \
-             uncertainty U, in the quantity's unit and relative.\n\n{}",
+             at h = 0, the fit's standard deviation σ, the data range Δ, the safety \
+             factor (1.25 where 0.5 ≤ p < 2.1 and σ < Δ, 3 otherwise) and the finest \
+             grid's uncertainty U, in the quantity's unit and relative.\n\n{}",
             uncertainty.to_markdown()
         ));
     }
