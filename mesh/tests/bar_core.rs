@@ -33,13 +33,8 @@ fn bar_core_coarsens_the_interior_only() {
         steel(&uniform.1),
         steel(&lean.1)
     );
-    let rel = |a: f64, b: f64| (a - b).abs() / b;
-    assert!(
-        rel(
-            lean.0.interface_area_adhesive_m2,
-            uniform.0.interface_area_adhesive_m2
-        ) < 1e-3
-    );
+    assert_bonded_interface_kept(&uniform.0, &lean.0);
+    let rel = relative_difference;
     assert!(rel(lean.0.volume_steel_m3, uniform.0.volume_steel_m3) < 1e-3);
     let interfaces = |m: &Model| m.interfaces.len() as f64;
     assert!(rel(interfaces(&lean.1), interfaces(&uniform.1)) < 0.05);

@@ -37,13 +37,8 @@ fn unbonded_size_coarsens_past_the_bonded_zone_only() {
         tets(&uniform.1),
         tets(&lean.1)
     );
-    let rel = |a: f64, b: f64| (a - b).abs() / b;
-    assert!(
-        rel(
-            lean.0.interface_area_adhesive_m2,
-            uniform.0.interface_area_adhesive_m2
-        ) < 1e-3
-    );
+    assert_bonded_interface_kept(&uniform.0, &lean.0);
+    let rel = relative_difference;
     let volume = |r: &mesh::MeshReport| r.volume_steel_m3 + r.volume_concrete_m3;
     assert!(rel(volume(&lean.0), volume(&uniform.0)) < 1e-3);
     let adhesive = |r: &mesh::MeshReport| r.interface_elements_adhesive as f64;

@@ -315,3 +315,21 @@ pub fn smooth_meshes(
         })
         .collect()
 }
+
+/// |a − b| / b.
+pub fn relative_difference(a: f64, b: f64) -> f64 {
+    (a - b).abs() / b
+}
+
+/// A lean mesh (coarser somewhere away from the bond) keeps the bonded
+/// interface: its area to 1e-3 of the uniform mesh's.
+pub fn assert_bonded_interface_kept(uniform: &mesh::MeshReport, lean: &mesh::MeshReport) {
+    let (a, b) = (
+        lean.interface_area_adhesive_m2,
+        uniform.interface_area_adhesive_m2,
+    );
+    assert!(
+        relative_difference(a, b) < 1e-3,
+        "bonded interface area {b} → {a} m²"
+    );
+}
