@@ -406,6 +406,56 @@ fn a_cube_that_splits_at_its_peak_ends_at_a_brittle_failure() {
     std::fs::remove_dir_all(&work).unwrap();
 }
 
+/// A Coulomb interface on a local Mazars cube that splits past its peak
+/// (stress-holdout-4's case 5): the explicit retry's damage passes do not
+/// settle the steps just past the peak, and each, within
+/// `solver.dissipation_tolerance` of its own work, leaves 1-3 % of the
+/// reaction out of balance. Kept, they took the run's record to 1.11 % of
+/// W_ext, past the energy check of solve.json. A state that would fail
+/// that check is refused: the run ends as a result, a brittle failure with
+/// its cover cracked through, and its check passes.
+#[test]
+#[ignore = "long (about 1 min): the on-demand suite, scripts/test-long.sh"]
+fn a_state_that_would_fail_the_energy_check_is_refused() {
+    let work = std::env::temp_dir().join(format!("ribbar-energy-bound-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&work);
+    let (out, solve) = run_tiny_ribbed(
+        &work,
+        &[
+            "--set",
+            "materials.interface={law: coulomb, Kn: 5.19e11 N/m^3, Ks: 2.045e12 N/m^3, ft: 1.97 MPa, C: 2.54 MPa, phi: 14.6 deg}",
+            "--set",
+            "materials.concrete={law: mazars, E: 27.9 GPa, nu: 0.2, ft: 3.03 MPa, Gf: 86 N/m}",
+            "--set",
+            "bar.ribs={height: 0.65 mm, spacing: 7.58 mm, angle: 61.8 deg}",
+            "--set",
+            "specimen.non_adhesive=contact",
+            "--set",
+            "mesh.h_interface=1.4 mm",
+        ],
+    );
+    brittle_failure_curve(&out, &solve, &work);
+    assert!(
+        solve["ending"]["cracked_through_tets"].as_u64().unwrap() > 0,
+        "{solve}"
+    );
+    let check = &solve["energy_check"];
+    assert_eq!(check["passed"], true, "{solve}");
+    assert!(check["max_relative_imbalance"].as_f64().unwrap() <= 1e-2);
+    let refused = solve["cutbacks"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|c| {
+            c.as_str()
+                .unwrap()
+                .contains("would fail the run's energy check")
+        })
+        .count();
+    assert!(refused >= 1, "{solve}");
+    std::fs::remove_dir_all(&work).unwrap();
+}
+
 /// The crack band of the split diagnosis on real gmsh meshes of the tiny
 /// ribbed specimen, whole and half-turn half: every concrete tet crosses
 /// the cover; a ring of tets around the bar (centroid within 3 mm of its

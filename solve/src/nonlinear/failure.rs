@@ -157,6 +157,20 @@ pub enum StepFailure {
         limit: f64,
         regimes: RegimeChanges,
     },
+    /// A converged step that would take the run's energy record outside
+    /// the energy check of solve.json (`crate::energy::check`): W_ext and
+    /// W_int part, or the dissipated energy falls, by more than its
+    /// tolerance of W_ext, each step within `solver.dissipation_tolerance`
+    /// but their sum not.
+    #[error("the converged state would fail the run's energy check: W_ext and W_int part by {imbalance:e} of W_ext, the dissipated energy changes by {dissipation_increment:e} of it in the step, the check allows {limit}. {regimes}")]
+    FailsEnergyCheck {
+        /// |W_ext − W_int| / W_ext after the step.
+        imbalance: f64,
+        /// ΔW_diss / W_ext of the step.
+        dissipation_increment: f64,
+        limit: f64,
+        regimes: RegimeChanges,
+    },
     #[error("no convergence in {iterations} iterations (last relative residual {relative_residual:e}). {regimes}")]
     IterationLimit {
         iterations: usize,
@@ -176,6 +190,7 @@ macro_rules! recorded_regimes {
             | StepFailure::Unsettled { regimes, .. }
             | StepFailure::CreatesEnergy { regimes, .. }
             | StepFailure::OutOfBalance { regimes, .. }
+            | StepFailure::FailsEnergyCheck { regimes, .. }
             | StepFailure::IterationLimit { regimes, .. } => Some(regimes),
             _ => None,
         }

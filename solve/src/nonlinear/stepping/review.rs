@@ -5,6 +5,7 @@
 
 use super::{release_retried, Averaging, Driver, Path, Plan};
 use crate::assembly::{AssemblyError, Outputs, States, System, Tangents};
+use crate::energy::ENERGY_TOLERANCE;
 use crate::laws::TangentKind;
 use crate::linalg::norm;
 use crate::nonlinear::control::ControlMode;
@@ -188,8 +189,9 @@ impl Driver<'_> {
     /// that refuses it when it gives back from the dissipated energy, or
     /// leaves forces out of balance whose work is, more than
     /// `solver.dissipation_tolerance` of the work the step received plus
-    /// [`DISSIPATION_FLOOR`] of W_ext. The state is the tracker's trial
-    /// until the commit accepts it.
+    /// [`DISSIPATION_FLOOR`] of W_ext, or when it would take the run's
+    /// record outside the energy check of solve.json. The state is the
+    /// tracker's trial until the commit accepts it.
     fn energy_rejection(
         &mut self,
         path: &mut Path,
@@ -238,6 +240,17 @@ impl Driver<'_> {
                 of_step_work: unbalanced / step_work,
                 of_total_work: unbalanced / row.w_ext,
                 limit,
+                regimes,
+            }
+        } else if !row.keeps_check(&last, ENERGY_TOLERANCE) {
+            // Each step within the rules above may still leave a part of
+            // its work unbalanced; summed over a snap-back they can take
+            // the record past the check that solve.json reports, so the
+            // check itself bounds the path.
+            StepFailure::FailsEnergyCheck {
+                imbalance: (row.w_ext - row.w_int).abs() / row.w_ext,
+                dissipation_increment: (row.dissipated - last.dissipated) / row.w_ext,
+                limit: ENERGY_TOLERANCE,
                 regimes,
             }
         } else {
