@@ -95,10 +95,22 @@ impl EnergyRow {
             .all(|v| v.is_finite())
     }
 
+    /// |W_ext − W_int| / W_ext: the share of the work the record leaves
+    /// unbalanced (for W_ext > 0).
+    pub fn relative_imbalance(&self) -> f64 {
+        (self.w_ext - self.w_int).abs() / self.w_ext
+    }
+
+    /// (dissipated − `previous`'s dissipated) / W_ext: what the step added
+    /// to the dissipated energy, negative where it gave some back.
+    pub fn relative_dissipation_increment(&self, previous: &EnergyRow) -> f64 {
+        (self.dissipated - previous.dissipated) / self.w_ext
+    }
+
     /// Whether this step, after `previous`, keeps the measures of
-    /// [`check`] within `tolerance` of W_ext: |W_ext − W_int|, the
-    /// dissipated energy and its increment. A step with W_ext ≤ 0 has no
-    /// scale and keeps them; a non-finite energy does not.
+    /// [`check`] within `tolerance`: the relative imbalance, the dissipated
+    /// energy and its increment. A step with W_ext ≤ 0 has no scale and
+    /// keeps them; a non-finite energy does not.
     pub fn keeps_check(&self, previous: &EnergyRow, tolerance: f64) -> bool {
         if !self.is_finite() {
             return false;
@@ -106,10 +118,9 @@ impl EnergyRow {
         if self.w_ext <= 0.0 {
             return true;
         }
-        let limit = tolerance * self.w_ext;
-        (self.w_ext - self.w_int).abs() <= limit
-            && self.dissipated - previous.dissipated >= -limit
-            && self.dissipated >= -limit
+        self.relative_imbalance() <= tolerance
+            && self.relative_dissipation_increment(previous) >= -tolerance
+            && self.dissipated / self.w_ext >= -tolerance
     }
 }
 
@@ -494,14 +505,14 @@ pub fn check(rows: &[EnergyRow], tolerance: f64) -> EnergyCheck {
             break;
         }
         if r.w_ext > 0.0 {
-            let imbalance = (r.w_ext - r.w_int).abs() / r.w_ext;
+            let imbalance = r.relative_imbalance();
             if imbalance > out.max_relative_imbalance {
                 out.max_relative_imbalance = imbalance;
                 out.step_of_max_imbalance = k + 1;
             }
             out.min_dissipation_increment = out
                 .min_dissipation_increment
-                .min((r.dissipated - prev.dissipated) / r.w_ext);
+                .min(r.relative_dissipation_increment(&prev));
             out.min_dissipation = out.min_dissipation.min(r.dissipated / r.w_ext);
         }
         prev = *r;

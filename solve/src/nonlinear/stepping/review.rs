@@ -248,8 +248,8 @@ impl Driver<'_> {
             // the record past the check that solve.json reports, so the
             // check itself bounds the path.
             StepFailure::FailsEnergyCheck {
-                imbalance: (row.w_ext - row.w_int).abs() / row.w_ext,
-                dissipation_increment: (row.dissipated - last.dissipated) / row.w_ext,
+                imbalance: row.relative_imbalance(),
+                dissipation_increment: row.relative_dissipation_increment(&last),
                 limit: ENERGY_TOLERANCE,
                 regimes,
             }
@@ -351,9 +351,9 @@ impl Driver<'_> {
 /// interface point) takes the damage its implicit history reached in the
 /// step instead of the extrapolated one (what an implicit Newton
 /// iteration would see there), over the force criterion's scale
-/// ([`Workspace::force_scale`]). `explicit`: the tets integrated explicitly for the whole
-/// run (see `release_retried`). Overwrites `scratch` and the
-/// workspace's trial states and internal forces (see
+/// ([`Workspace::force_scale`]). `explicit`: the tets integrated
+/// explicitly for the whole run (see `release_retried`). Overwrites
+/// `scratch` and the workspace's trial states and internal forces (see
 /// `Driver::extrapolation_error`, which keeps the step's).
 fn implicit_residual(
     ws: &mut Workspace<'_>,
