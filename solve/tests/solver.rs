@@ -1587,6 +1587,82 @@ fn dissipation_control_steps_are_capped_by_the_work_over_the_largest_step() {
     );
 }
 
+/// Progress reports name what each attempt prescribed: the cut-back where
+/// displacement control hands over says that the next attempt prescribes
+/// an energy (J), the attempt after it is dissipation-controlled, and a
+/// converged step reported as displacement-controlled moved λ by exactly
+/// its size.
+#[test]
+fn progress_reports_carry_each_attempts_control_mode() {
+    use solve::nonlinear::{ControlMode, Cutback};
+    let (m, laws, loading) = snap_back_case();
+    let settings = SolverSettings {
+        interface_holds: InterfaceHolds::Always,
+        ..SolverSettings::default()
+    };
+    enum Event {
+        Converged {
+            mode: ControlMode,
+            size: f64,
+            u: f64,
+        },
+        CutBack(Cutback),
+    }
+    struct Events(Vec<Event>);
+    impl Observer for Events {
+        fn step_converged(&mut self, r: &StepReport, _: &CommittedView<'_>) {
+            self.0.push(Event::Converged {
+                mode: r.mode,
+                size: r.step_size,
+                u: r.row.u_imposed,
+            });
+        }
+        fn cutback(&mut self, c: &Cutback) {
+            self.0.push(Event::CutBack(c.clone()));
+        }
+    }
+    let mut events = Events(Vec::new());
+    let res = solve_pullout(&m, &laws, &loading, &settings, None, &mut events).unwrap();
+    assert!(
+        matches!(res.ending, Ending::Unloaded { .. }),
+        "{:?}",
+        res.ending
+    );
+    let hand_over = events
+        .0
+        .iter()
+        .position(|e| {
+            matches!(e, Event::CutBack(c) if c.failed_mode == ControlMode::Displacement
+                && c.next_mode == ControlMode::Energy)
+        })
+        .expect("a cut-back that hands over to dissipation control");
+    let Event::CutBack(c) = &events.0[hand_over] else {
+        unreachable!()
+    };
+    assert!(c.next_step_size > 0.0 && c.next_step_size.is_finite());
+    let next_mode = match &events.0[hand_over + 1] {
+        Event::Converged { mode, .. } => *mode,
+        Event::CutBack(c) => c.failed_mode,
+    };
+    assert_eq!(next_mode, ControlMode::Energy);
+    let mut lambda = 0.0;
+    let mut displacement_steps = 0;
+    for e in &events.0 {
+        if let Event::Converged { mode, size, u } = e {
+            if *mode == ControlMode::Displacement {
+                assert!(
+                    ((u - lambda) - size).abs() <= 1e-9 * size,
+                    "a displacement-controlled step of {size} m moved λ by {} m",
+                    u - lambda
+                );
+                displacement_steps += 1;
+            }
+            lambda = *u;
+        }
+    }
+    assert!(displacement_steps > 0);
+}
+
 /// Where the bond's softening releases more energy than the bar can take
 /// back, displacement control finds no equilibrium past the peak and
 /// stops; dissipation control follows the path back in the imposed

@@ -162,8 +162,9 @@ impl Observer for StageObserver<'_> {
         ));
         let t = &report.times;
         self.ctx.printer.detail(&format!(
-            "solve:   step size {:.3e} m; relative residuals [{}]{}{}; assembly {:.2} s, constitutive {:.2} s, factorisation {:.2} s, linear solve {:.2} s",
+            "solve:   step size {:.3e} {}; relative residuals [{}]{}{}; assembly {:.2} s, constitutive {:.2} s, factorisation {:.2} s, linear solve {:.2} s",
             report.step_size,
+            report.mode.step_unit(),
             residual_list(&report.residual_history),
             if report.force_only {
                 " (stagnating: ended on the best iterate)"
@@ -270,8 +271,14 @@ impl Observer for StageObserver<'_> {
 
     fn cutback(&mut self, event: &Cutback) {
         let text = format!(
-            "step {} at u = {:.4e} m: {}; step {:.3e} → {:.3e} m",
-            event.step, event.u_imposed, event.reason, event.failed_step_size, event.next_step_size
+            "step {} at u = {:.4e} m: {}; step {:.3e} {} → {:.3e} {}",
+            event.step,
+            event.u_imposed,
+            event.reason,
+            event.failed_step_size,
+            event.failed_mode.step_unit(),
+            event.next_step_size,
+            event.next_mode.step_unit(),
         );
         self.ctx.printer.detail(&format!(
             "solve: cut back: {text}; relative residuals [{}]",

@@ -3,6 +3,7 @@
 //! [`Observer`] receives.
 
 use super::checkpoint::Checkpoint;
+use super::control::ControlMode;
 use super::failure::StepFailure;
 pub use super::summary::{Ending, Summary, WallTimes};
 use crate::assembly::{AssemblyError, ElementLaws, States};
@@ -28,7 +29,9 @@ pub struct RunResult {
 #[derive(Debug, Clone, PartialEq)]
 pub struct StepReport {
     pub row: CurveRow,
-    /// Step size of the converged attempt, m.
+    /// What the converged attempt prescribed, and its size in that mode's
+    /// unit (`ControlMode::step_unit`: m, or J under dissipation control).
+    pub mode: ControlMode,
     pub step_size: f64,
     /// Wall times of this step (all attempts).
     pub times: WallTimes,
@@ -51,7 +54,13 @@ pub struct Cutback {
     pub step: usize,
     /// Imposed displacement of the failed attempt, m.
     pub u_imposed: f64,
+    /// What the failed attempt prescribed, and its size in that mode's
+    /// unit (`ControlMode::step_unit`).
+    pub failed_mode: ControlMode,
     pub failed_step_size: f64,
+    /// What the next attempt prescribes, and its size: another mode where
+    /// displacement control hands over to dissipation control.
+    pub next_mode: ControlMode,
     pub next_step_size: f64,
     pub reason: StepFailure,
     /// ‖r‖/‖reaction‖ per iteration.

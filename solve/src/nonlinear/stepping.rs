@@ -707,7 +707,9 @@ impl<'a> Driver<'a> {
                     observer.cutback(&Cutback {
                         step: path.rows.len() + 1,
                         u_imposed: lambda,
+                        failed_mode: plan.mode,
                         failed_step_size: plan.size,
+                        next_mode: plan.mode,
                         next_step_size: plan.size,
                         reason: attempt.failure.clone().expect("a failed attempt"),
                         residual_history: attempt.history.clone(),
@@ -907,6 +909,7 @@ impl<'a> Driver<'a> {
         observer.step_converged(
             &StepReport {
                 row,
+                mode: plan.mode,
                 step_size: plan.size,
                 times: step_wall,
                 residual_history: attempt.history,
@@ -1030,13 +1033,42 @@ impl<'a> Driver<'a> {
             StepFailure::CurveResolution { next_step, .. } => next_step,
             _ => plan.size * loading.cutback,
         };
+        // `auto` hands over only where displacement control would stop (at
+        // the minimum step), so that every run it carries to the end keeps
+        // its curve; `energy` at the first failure.
+        let (released, work) = path.last_energies();
+        let hand_over = match self.settings.path_following {
+            PathFollowing::Energy => true,
+            PathFollowing::Auto => self.at_min_step(&path, plan),
+            _ => false,
+        };
+        // Displacement control found no equilibrium just after a step that
+        // dissipated: a snap-back, which dissipation control follows. The
+        // step releases what the last one did. (After an elastic step the
+        // energy constraint would not respond to λ: the step is cut back
+        // first, nearer to where dissipation starts.)
+        let energy_step = (hand_over
+            && !load_jump
+            && !converged
+            && plan.mode == ControlMode::Displacement
+            && path.mode == ControlMode::Displacement
+            && released > STARTS_DISSIPATING * work.abs()
+            && !self.unloaded(&path))
+        .then(|| released.max(self.energy_floor(&path)));
         self.ws.trial.clone_from(&path.committed);
         let step = path.rows.len() + 1;
+        let (next_mode, next_step_size) = match energy_step {
+            Some(energy) => (ControlMode::Energy, energy),
+            None if load_jump => (ControlMode::Displacement, next),
+            None => (plan.mode, next),
+        };
         observer.cutback(&Cutback {
             step,
             u_imposed: lambda,
+            failed_mode: plan.mode,
             failed_step_size: plan.size,
-            next_step_size: next,
+            next_mode,
+            next_step_size,
             reason: reason.clone(),
             residual_history: attempt.history.clone(),
         });
@@ -1050,29 +1082,9 @@ impl<'a> Driver<'a> {
             path.curve_step = next;
             return Ok(Outcome::Continue(path));
         }
-        let (released, work) = path.last_energies();
-        // `auto` hands over only where displacement control would stop (at
-        // the minimum step), so that every run it carries to the end keeps
-        // its curve; `energy` at the first failure.
-        let hand_over = match self.settings.path_following {
-            PathFollowing::Energy => true,
-            PathFollowing::Auto => self.at_min_step(&path, plan),
-            _ => false,
-        };
-        if hand_over
-            && plan.mode == ControlMode::Displacement
-            && path.mode == ControlMode::Displacement
-            && released > STARTS_DISSIPATING * work.abs()
-            && !self.unloaded(&path)
-        {
-            // Displacement control found no equilibrium just after a step
-            // that dissipated: a snap-back, which dissipation control
-            // follows. The step releases what the last one did. (After an
-            // elastic step the energy constraint would not respond to λ:
-            // the step is cut back first, nearer to where dissipation
-            // starts.)
+        if let Some(energy) = energy_step {
             path.mode = ControlMode::Energy;
-            path.next_step = released.max(self.energy_floor(&path));
+            path.next_step = energy;
             return Ok(Outcome::Continue(path));
         }
         let min_step = self.min_step(&path, plan);
