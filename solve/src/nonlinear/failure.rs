@@ -135,7 +135,7 @@ pub enum StepFailure {
     /// non-potential exchange, a small part of a step's work), so Newton
     /// found another solution of the equilibrium equations than the
     /// path's, typically a force jump after explicit retries or holds.
-    #[error("the converged state gives back {of_step_work:.3} of its step's external work from the dissipated energy ({of_total_work:e} of W_ext), more than solver.dissipation_tolerance {limit}: it is not on the path of the laws. {regimes}")]
+    #[error("the converged state gives back {} ({of_total_work:e} of W_ext), more than solver.dissipation_tolerance {limit}: it is not on the path of the laws. {regimes}", ShareOfStepWork { share: *.of_step_work, what: "from the dissipated energy", none: "dissipated energy" })]
     CreatesEnergy {
         /// −ΔW_diss / |ΔW_ext| of the step.
         of_step_work: f64,
@@ -148,7 +148,7 @@ pub enum StepFailure {
     /// in which the forces left out of balance did more work than
     /// `solver.dissipation_tolerance` of the step's external work (and a
     /// floor of W_ext): W_ext and W_int part by that much.
-    #[error("the converged state is out of balance: the residual forces did {of_step_work:.3} of its step's external work ({of_total_work:e} of W_ext), more than solver.dissipation_tolerance {limit}. {regimes}")]
+    #[error("the converged state is out of balance: the residual forces did {} ({of_total_work:e} of W_ext), more than solver.dissipation_tolerance {limit}. {regimes}", ShareOfStepWork { share: *.of_step_work, what: "", none: "work" })]
     OutOfBalance {
         /// |Δ(W_ext − W_int)| / |ΔW_ext| of the step.
         of_step_work: f64,
@@ -197,6 +197,30 @@ macro_rules! recorded_regimes {
     };
 }
 
+/// A share of a step's external work as the energy rules report it; a
+/// step back along a snap-back receives none, and its share is infinite.
+struct ShareOfStepWork {
+    share: f64,
+    /// What the share is taken from, after "of its step's external work".
+    what: &'static str,
+    /// What is named where the step received no work.
+    none: &'static str,
+}
+
+impl std::fmt::Display for ShareOfStepWork {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        if self.share.is_finite() {
+            write!(f, "{:.3} of its step's external work", self.share)?;
+            if !self.what.is_empty() {
+                write!(f, " {}", self.what)?;
+            }
+            Ok(())
+        } else {
+            write!(f, "{} in a step that received no external work", self.none)
+        }
+    }
+}
+
 impl StepFailure {
     /// The regime changes of the last iterate, where the failure records them.
     pub fn regimes(&self) -> Option<&RegimeChanges> {
@@ -206,5 +230,53 @@ impl StepFailure {
     /// [`StepFailure::regimes`], to be recounted.
     pub(crate) fn regimes_mut(&mut self) -> Option<&mut RegimeChanges> {
         recorded_regimes!(self)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The energy rules' reasons read as sentences whether or not the step
+    /// received work: a step back along a snap-back receives none, and its
+    /// share of it is not a number to print.
+    #[test]
+    fn energy_reasons_name_a_step_without_work() {
+        let creates = |of_step_work| StepFailure::CreatesEnergy {
+            of_step_work,
+            of_total_work: 0.5,
+            limit: 0.15,
+            regimes: RegimeChanges::default(),
+        };
+        let unbalanced = |of_step_work| StepFailure::OutOfBalance {
+            of_step_work,
+            of_total_work: 0.01,
+            limit: 0.15,
+            regimes: RegimeChanges::default(),
+        };
+        let text = creates(0.25).to_string();
+        assert!(
+            text.contains(
+                "gives back 0.250 of its step's external work from the dissipated energy"
+            ),
+            "{text}"
+        );
+        let text = creates(f64::INFINITY).to_string();
+        assert!(
+            text.contains("gives back dissipated energy in a step that received no external work")
+                && !text.contains("inf"),
+            "{text}"
+        );
+        let text = unbalanced(20.784).to_string();
+        assert!(
+            text.contains("the residual forces did 20.784 of its step's external work ("),
+            "{text}"
+        );
+        let text = unbalanced(f64::INFINITY).to_string();
+        assert!(
+            text.contains("the residual forces did work in a step that received no external work")
+                && !text.contains("inf"),
+            "{text}"
+        );
     }
 }
