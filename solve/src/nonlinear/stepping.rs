@@ -1033,28 +1033,11 @@ impl<'a> Driver<'a> {
             StepFailure::CurveResolution { next_step, .. } => next_step,
             _ => plan.size * loading.cutback,
         };
-        // `auto` hands over only where displacement control would stop (at
-        // the minimum step), so that every run it carries to the end keeps
-        // its curve; `energy` at the first failure.
-        let (released, work) = path.last_energies();
-        let hand_over = match self.settings.path_following {
-            PathFollowing::Energy => true,
-            PathFollowing::Auto => self.at_min_step(&path, plan),
-            _ => false,
+        let energy_step = if load_jump || converged {
+            None
+        } else {
+            self.hand_over(&path, plan)
         };
-        // Displacement control found no equilibrium just after a step that
-        // dissipated: a snap-back, which dissipation control follows. The
-        // step releases what the last one did. (After an elastic step the
-        // energy constraint would not respond to λ: the step is cut back
-        // first, nearer to where dissipation starts.)
-        let energy_step = (hand_over
-            && !load_jump
-            && !converged
-            && plan.mode == ControlMode::Displacement
-            && path.mode == ControlMode::Displacement
-            && released > STARTS_DISSIPATING * work.abs()
-            && !self.unloaded(&path))
-        .then(|| released.max(self.energy_floor(&path)));
         self.ws.trial.clone_from(&path.committed);
         let step = path.rows.len() + 1;
         let (next_mode, next_step_size) = match energy_step {
@@ -1129,6 +1112,31 @@ impl<'a> Driver<'a> {
             path.next_step = next.max(min_step);
         }
         Ok(Outcome::Continue(path))
+    }
+
+    /// The size (J) of the dissipation-controlled step that follows a
+    /// failed displacement-controlled one, if dissipation control takes
+    /// over there. Displacement control found no equilibrium just after a
+    /// step that dissipated: a snap-back, which dissipation control
+    /// follows, its step releasing what the last one did. (After an
+    /// elastic step the energy constraint would not respond to λ: the
+    /// step is cut back first, nearer to where dissipation starts.)
+    fn hand_over(&self, path: &Path, plan: &Plan) -> Option<f64> {
+        // `auto` hands over only where displacement control would stop (at
+        // the minimum step), so that every run it carries to the end keeps
+        // its curve; `energy` at the first failure.
+        let allowed = match self.settings.path_following {
+            PathFollowing::Energy => true,
+            PathFollowing::Auto => self.at_min_step(path, plan),
+            _ => false,
+        };
+        let (released, work) = path.last_energies();
+        (allowed
+            && plan.mode == ControlMode::Displacement
+            && path.mode == ControlMode::Displacement
+            && released > STARTS_DISSIPATING * work.abs()
+            && !self.unloaded(path))
+        .then(|| released.max(self.energy_floor(path)))
     }
 
     /// The path `back` from before the cut-backs that led to the stall of
