@@ -101,6 +101,12 @@ impl EnergyRow {
         (self.w_ext - self.w_int).abs() / self.w_ext
     }
 
+    /// dissipated / W_ext: the share of the work the record has dissipated,
+    /// negative where it reports energy created.
+    pub fn relative_dissipation(&self) -> f64 {
+        self.dissipated / self.w_ext
+    }
+
     /// (dissipated − `previous`'s dissipated) / W_ext: what the step added
     /// to the dissipated energy, negative where it gave some back.
     pub fn relative_dissipation_increment(&self, previous: &EnergyRow) -> f64 {
@@ -120,7 +126,7 @@ impl EnergyRow {
         }
         self.relative_imbalance() <= tolerance
             && self.relative_dissipation_increment(previous) >= -tolerance
-            && self.dissipated / self.w_ext >= -tolerance
+            && self.relative_dissipation() >= -tolerance
     }
 }
 
@@ -513,7 +519,7 @@ pub fn check(rows: &[EnergyRow], tolerance: f64) -> EnergyCheck {
             out.min_dissipation_increment = out
                 .min_dissipation_increment
                 .min(r.relative_dissipation_increment(&prev));
-            out.min_dissipation = out.min_dissipation.min(r.dissipated / r.w_ext);
+            out.min_dissipation = out.min_dissipation.min(r.relative_dissipation());
         }
         prev = *r;
     }
