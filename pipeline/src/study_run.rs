@@ -368,8 +368,10 @@ fn finest_error_line(study: &ConvergenceStudy) -> String {
 
 /// For each grid but the finest: its size, the next finer one's (mm) and
 /// the relative L2 distance of σ_mb along FED from its curve to that
-/// grid's, over their common FED range (empty where the curves have none):
-/// for a step-size series, the curve error of a step against half of it.
+/// grid's, over their common FED range: for a step-size series, the curve
+/// error of a step against half of it. Where the distance is not defined
+/// (a curve whose free end snaps back, curves with no common range) the
+/// cell is empty and `why_none` says why.
 fn curve_distance_table(curves: &[(f64, &[CurveRow])]) -> post::Table {
     let mut sorted = curves.to_vec();
     sorted.sort_by(|a, b| a.0.total_cmp(&b.0));
@@ -377,16 +379,21 @@ fn curve_distance_table(curves: &[(f64, &[CurveRow])]) -> post::Table {
         .windows(2)
         .map(|pair| {
             let ((fine_h, fine), (h, coarse)) = (pair[0], pair[1]);
-            let distance = post::curve_distance(coarse, fine, post::CurveAxis::Fed, None).ok();
+            let (distance, why_none) =
+                match post::curve_distance(coarse, fine, post::CurveAxis::Fed, None) {
+                    Ok(d) => (post::Cell::Num(d), post::Cell::Empty),
+                    Err(e) => (post::Cell::Empty, post::Cell::Text(e.to_string())),
+                };
             vec![
                 post::Cell::Num(h * 1e3),
                 post::Cell::Num(fine_h * 1e3),
-                distance.into(),
+                distance,
+                why_none,
             ]
         })
         .collect();
     post::Table {
-        columns: ["h_mm", "finer_h_mm", "relative_l2_along_fed"]
+        columns: ["h_mm", "finer_h_mm", "relative_l2_along_fed", "why_none"]
             .map(String::from)
             .to_vec(),
         rows,
@@ -556,7 +563,7 @@ mod tests {
         let table = curve_distance_table(&curves);
         assert_eq!(table.rows.len(), 2, "{}", table.to_markdown());
         for (row, (h, fine)) in table.rows.iter().zip([(2e-4, 1e-4), (4e-4, 2e-4)]) {
-            let [post::Cell::Num(row_h), post::Cell::Num(row_fine), post::Cell::Num(d)] =
+            let [post::Cell::Num(row_h), post::Cell::Num(row_fine), post::Cell::Num(d), post::Cell::Empty] =
                 row.as_slice()
             else {
                 panic!("{row:?}");
@@ -565,5 +572,21 @@ mod tests {
             let expected = (slope(h) - slope(fine)) / slope(fine);
             assert!((d / expected - 1.0).abs() < 1e-3, "{row:?}");
         }
+    }
+
+    /// A grid whose free end snaps back has no distance along FED; its row
+    /// says why instead of leaving the cell blank.
+    #[test]
+    fn a_curve_distance_that_is_not_defined_says_why() {
+        let fine = proportional_curve(1e-4);
+        let mut coarse = proportional_curve(2e-4);
+        let last = coarse.len() - 1;
+        coarse[last].fed = 0.5 * coarse[last - 1].fed;
+        let curves: Vec<(f64, &[CurveRow])> = vec![(1e-4, &fine), (2e-4, &coarse)];
+        let table = curve_distance_table(&curves);
+        let [_, _, post::Cell::Empty, post::Cell::Text(why)] = table.rows[0].as_slice() else {
+            panic!("{:?}", table.rows[0]);
+        };
+        assert!(why.contains("goes back") && why.contains("test"), "{why}");
     }
 }

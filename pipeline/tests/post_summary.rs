@@ -370,6 +370,49 @@ fn curve_distance_axes_differ_on_pre_slip() {
     assert!(curve_distance(&a, &b, CurveAxis::ImposedDisplacement, None).unwrap() > 1e-3);
 }
 
+/// A step back of the abscissa within `FOLDED_RECESSION_SHARE` of the range
+/// (an IMPL-EX step's nanometres, where σ drops as the bar unloads and its
+/// free end comes back) is folded into a vertical drop, so the distance
+/// is continuous across it: the same, to the fold's share, as with the
+/// step moved as far forward. A deeper step back is refused, and so are
+/// small ones that add up past the share.
+#[test]
+fn curve_distance_folds_steps_back_of_a_few_nanometres() {
+    use pipeline::post::FOLDED_RECESSION_SHARE;
+    let reference = rows_xy(&[(0.3e-3, 1e6), (0.6e-3, 2e6), (1.0e-3, 2.5e6)]);
+    let test = |back: f64| {
+        rows_xy(&[
+            (0.3e-3, 1.1e6),
+            (0.3e-3 - back, 0.9e6),
+            (0.6e-3, 2.2e6),
+            (1.0e-3, 2.75e6),
+        ])
+    };
+    let small = 0.5 * FOLDED_RECESSION_SHARE * 1.0e-3;
+    let folded = curve_distance(&test(small), &reference, CurveAxis::Fed, None).unwrap();
+    let forward = curve_distance(&test(-small), &reference, CurveAxis::Fed, None).unwrap();
+    assert!(
+        (folded / forward - 1.0).abs() < FOLDED_RECESSION_SHARE,
+        "{folded} against {forward}"
+    );
+    let deep = 2.0 * FOLDED_RECESSION_SHARE * 1.0e-3;
+    let e = curve_distance(&test(deep), &reference, CurveAxis::Fed, None).unwrap_err();
+    assert!(
+        e.to_string().contains("step 2") && e.to_string().contains("goes back"),
+        "{e}"
+    );
+    let back = 0.8 * FOLDED_RECESSION_SHARE * 1.0e-3;
+    let twice = rows_xy(&[
+        (0.3e-3, 1.1e6),
+        (0.3e-3 - back, 1.05e6),
+        (0.6e-3, 2.2e6),
+        (0.6e-3 - back, 2.1e6),
+        (1.0e-3, 2.75e6),
+    ]);
+    let e = curve_distance(&twice, &reference, CurveAxis::Fed, None).unwrap_err();
+    assert!(e.to_string().contains("step 4"), "{e}");
+}
+
 /// Curves the distance cannot be defined for are refused.
 #[test]
 fn curve_distance_refuses() {

@@ -40,7 +40,7 @@ pub use convergence::{
     GridResult, TripletEstimate, GCI_SAFETY_FACTOR,
 };
 pub use curve::{parse_curve_csv, read_curve_csv, CurveRow, CURVE_COLUMNS};
-pub use distance::{curve_distance, CurveAxis};
+pub use distance::{curve_distance, CurveAxis, FOLDED_RECESSION_SHARE};
 pub use error::PostError;
 pub use plot::{
     bond_slip_plot, bond_slip_png, bond_slip_svg, ensure_font, error_vs_time_plot,
