@@ -16,6 +16,13 @@ pub enum CurveAxis {
 }
 
 impl CurveAxis {
+    fn name(self) -> &'static str {
+        match self {
+            CurveAxis::Fed => "free-end displacement",
+            CurveAxis::ImposedDisplacement => "imposed displacement",
+        }
+    }
+
     fn of(self, r: &CurveRow) -> f64 {
         match self {
             CurveAxis::Fed => r.fed,
@@ -72,10 +79,15 @@ fn polyline(rows: &[CurveRow], axis: CurveAxis, name: &str) -> Result<Vec<(f64, 
                 return Err(PostError::invalid(
                     format!("curve `{name}` step {}", r.step),
                     format!(
-                        "{axis:?} goes back from {x_max} m to {x} m, {:.1e} of its range in all \
-                         (up to {FOLDED_RECESSION_SHARE:e} is folded); the distance needs it \
-                         non-decreasing",
-                        (folded + x_max - lowest) / scale
+                        "the {} goes back from {x_max:.6e} m to {x:.6e} m, {:.1e} of its range \
+                         in all (up to {FOLDED_RECESSION_SHARE:e} is folded): σ_mb is not a \
+                         function of it, so the distance along it is not defined{}",
+                        axis.name(),
+                        (folded + x_max - lowest) / scale,
+                        match axis {
+                            CurveAxis::Fed => "; compare along the imposed displacement",
+                            CurveAxis::ImposedDisplacement => "",
+                        }
                     ),
                 ));
             }
