@@ -758,3 +758,57 @@ fn multigrid_preconditioned_solve_follows_the_cholesky_curve() {
     assert!(common >= 3, "only {common} common steps");
     std::fs::remove_dir_all(&work).unwrap();
 }
+
+/// A smooth bar whose stiff, strong bond lets go at its peak (smooth
+/// holdout case 12, docs/smooth-holdout.md): dissipation control snaps the
+/// path back towards the origin and the run ends at a brittle failure with
+/// no crack band through the cover. Its line says so instead of naming a
+/// split cube, and the split's words stay for a cover that is cracked
+/// through.
+#[test]
+fn a_brittle_failure_without_a_crack_through_the_cover_does_not_call_it_a_split() {
+    let work = std::env::temp_dir().join(format!("ribbar-bond-lets-go-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&work);
+    let spec = repo().join("tests/data/tiny-smooth.yaml");
+    let sets = [
+        "loading.u_final=0.3 mm",
+        "materials.interface.delta_s=0.376",
+        "materials.interface.mu=0.7857",
+        "materials.interface.zeta=10.8",
+        "materials.interface.lambda0=1.52e-06 m",
+        "materials.interface.ft=5.78 MPa",
+        "materials.interface.Gf=200 N/m",
+        "materials.concrete.ft=2.79 MPa",
+        "mesh.h_interface=1.5 mm",
+        "specimen.non_adhesive=contact",
+        "specimen.adhesive_length=24 mm",
+    ];
+    let mut args = vec![
+        "run",
+        spec.to_str().unwrap(),
+        "--work",
+        work.to_str().unwrap(),
+    ];
+    args.extend(sets.iter().flat_map(|s| ["--set", s]));
+    let out = ribbar(&args);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let solve: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(work.join("tiny-smooth/solve.json")).unwrap(),
+    )
+    .unwrap();
+    let ending = &solve["ending"];
+    assert_eq!(ending["kind"], "brittle_failure", "{solve}");
+    assert_eq!(ending["cracked_through_tets"], 0, "{solve}");
+    let printed = String::from_utf8_lossy(&out.stderr);
+    let line = printed
+        .lines()
+        .find(|l| l.contains("ended at a brittle failure"))
+        .unwrap_or_else(|| panic!("{printed}"));
+    assert!(line.contains("no crack band crosses the cover"), "{line}");
+    assert!(!line.contains("the cube splits"), "{line}");
+    std::fs::remove_dir_all(&work).unwrap();
+}
