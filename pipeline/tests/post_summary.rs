@@ -371,8 +371,8 @@ fn curve_distance_axes_differ_on_pre_slip() {
 }
 
 /// A step back of the abscissa within `FOLDED_RECESSION_SHARE` of the range
-/// (an IMPL-EX step's nanometres, where σ drops as the bar unloads and its
-/// free end comes back) is folded into a vertical drop, so the distance
+/// (the nanometres a free end comes back by in some steps) is folded into
+/// a vertical jump of σ, so the distance
 /// is continuous across it: the same, to the fold's share, as with the
 /// step moved as far forward. A deeper step back is refused, and so are
 /// small ones that add up past the share.

@@ -36,9 +36,9 @@ impl CurveAxis {
 ///
 /// Measured on the FED of this project's study curves (51 distinct curves
 /// that step back at all): 11 step back by 0.04–21 nm in all, at most
-/// 9.6e-4 of their range (IMPL-EX steps, held interface points); the other
-/// 40 are the free end's snap-backs of split cubes and unzipping bonds,
-/// 1.4 µm and more, 4.7e-2 of the range and up. The share sits between the
+/// 9.6e-4 of their range (IMPL-EX and implicit runs alike); the other
+/// 40 go back 1.4 µm and more, 4.7e-2 of the range and up (37 of them in
+/// runs that end at a brittle failure or unloaded). The share sits between the
 /// two. Folded, a recession is an interval of no width, as the pre-slip
 /// branch is along FED: the distance leaves out the σ of at most that
 /// share of the range.
