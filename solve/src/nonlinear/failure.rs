@@ -106,8 +106,11 @@ pub enum StepFailure {
     /// A process-zone step converged with λ moved further than
     /// `loading.max_step`: the zone's jumps hardly respond to λ there, so
     /// the start state's own imbalance (IMPL-EX's error of the last step)
-    /// sends λ far; the step is taken under displacement control.
-    #[error("the process zone's step moved the imposed displacement by {increment:e} m, more than loading.max_step {limit:e} m: the step is taken under displacement control")]
+    /// sends λ far; or a dissipation-controlled step carried λ forward by
+    /// more than that, or past `u_final` (along the secant through the
+    /// origin a step releases nearly nothing). The step is taken under
+    /// displacement control.
+    #[error("the step under indirect control moved the imposed displacement by {increment:e} m, more than {limit:e} m (loading.max_step, or what is left to u_final): the step is taken under displacement control")]
     LoadJump { increment: f64, limit: f64 },
     /// The step converged, but its IMPL-EX extrapolation error (the
     /// relative residual of its displacement under the implicit damage) is

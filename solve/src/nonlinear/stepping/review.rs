@@ -337,12 +337,31 @@ impl Driver<'_> {
     }
 
     /// The failure of a converged process-zone step that moved λ to
-    /// `lambda`, further than `loading.max_step` from the last one.
+    /// `lambda`, further than `loading.max_step` from the last one; or of
+    /// a converged dissipation-controlled step that carried λ forward by
+    /// more than that, or past `u_final`. Where the path turns forward
+    /// again after a snap-back, a step's released energy ½(F₀λ − Fλ₀)
+    /// nearly vanishes along the secant through the origin, so a step of
+    /// a few millijoules may land anywhere on it: stress-holdout-8's case
+    /// 5 went from λ = 0.191 to 2.145 mm in one step (u_final 0.3 mm), its
+    /// force rising along that secant. Displacement control takes such a
+    /// step; backward jumps (a split's snap-back) stay dissipation
+    /// control's.
     fn load_jump(&self, path: &Path, plan: &Plan, lambda: f64) -> Option<StepFailure> {
         let increment = lambda - path.lambda;
-        let limit = self.loading.max_step;
-        (plan.mode == ControlMode::ProcessZone && increment.abs() > limit)
-            .then_some(StepFailure::LoadJump { increment, limit })
+        let max_step = self.loading.max_step;
+        let jumped = match plan.mode {
+            ControlMode::ProcessZone => increment.abs() > max_step,
+            ControlMode::Energy => {
+                increment > max_step || lambda > self.loading.u_final * (1.0 + 1e-12)
+            }
+            _ => false,
+        };
+        let limit = match plan.mode {
+            ControlMode::Energy => max_step.min(self.loading.u_final - path.lambda),
+            _ => max_step,
+        };
+        jumped.then_some(StepFailure::LoadJump { increment, limit })
     }
 }
 
