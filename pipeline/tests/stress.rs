@@ -28,14 +28,25 @@ fn run_tiny_ribbed(dir: &Path, extra: &[&str]) -> (Output, serde_json::Value) {
 /// `ribbar run tests/data/SCENE.yaml --work DIR -q EXTRA...`: its output
 /// and the scene's solve.json.
 fn run_test_scene(scene: &str, dir: &Path, extra: &[&str]) -> (Output, serde_json::Value) {
+    run_scene(scene, dir, &["-q"], extra)
+}
+
+/// `ribbar run tests/data/SCENE.yaml --work DIR FLAGS... EXTRA...`: its
+/// output and the scene's solve.json.
+fn run_scene(
+    scene: &str,
+    dir: &Path,
+    flags: &[&str],
+    extra: &[&str],
+) -> (Output, serde_json::Value) {
     let spec = repo().join(format!("tests/data/{scene}.yaml"));
     let mut args = vec![
         "run",
         spec.to_str().unwrap(),
         "--work",
         dir.to_str().unwrap(),
-        "-q",
     ];
+    args.extend_from_slice(flags);
     args.extend_from_slice(extra);
     let out = ribbar(&args);
     let solve =
@@ -779,7 +790,6 @@ fn multigrid_preconditioned_solve_follows_the_cholesky_curve() {
 fn a_brittle_failure_without_a_crack_through_the_cover_does_not_call_it_a_split() {
     let work = std::env::temp_dir().join(format!("ribbar-bond-lets-go-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&work);
-    let spec = repo().join("tests/data/tiny-smooth.yaml");
     let sets = [
         "loading.u_final=0.3 mm",
         "materials.interface.delta_s=0.376",
@@ -793,23 +803,14 @@ fn a_brittle_failure_without_a_crack_through_the_cover_does_not_call_it_a_split(
         "specimen.non_adhesive=contact",
         "specimen.adhesive_length=24 mm",
     ];
-    let mut args = vec![
-        "run",
-        spec.to_str().unwrap(),
-        "--work",
-        work.to_str().unwrap(),
-    ];
-    args.extend(sets.iter().flat_map(|s| ["--set", s]));
-    let out = ribbar(&args);
+    let args: Vec<&str> = sets.iter().flat_map(|s| ["--set", s]).collect();
+    // Not quiet: the ending's line is what the test reads.
+    let (out, solve) = run_scene("tiny-smooth", &work, &[], &args);
     assert!(
         out.status.success(),
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    let solve: serde_json::Value = serde_json::from_str(
-        &std::fs::read_to_string(work.join("tiny-smooth/solve.json")).unwrap(),
-    )
-    .unwrap();
     let ending = &solve["ending"];
     assert_eq!(ending["kind"], "brittle_failure", "{solve}");
     assert_eq!(ending["cracked_through_tets"], 0, "{solve}");

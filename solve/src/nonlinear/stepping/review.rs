@@ -349,17 +349,14 @@ impl Driver<'_> {
     /// control's.
     fn load_jump(&self, path: &Path, plan: &Plan, lambda: f64) -> Option<StepFailure> {
         let increment = lambda - path.lambda;
-        let max_step = self.loading.max_step;
-        let jumped = match plan.mode {
-            ControlMode::ProcessZone => increment.abs() > max_step,
-            ControlMode::Energy => {
-                increment > max_step || lambda > self.loading.u_final * (1.0 + 1e-12)
-            }
-            _ => false,
-        };
-        let limit = match plan.mode {
-            ControlMode::Energy => max_step.min(self.loading.u_final - path.lambda),
-            _ => max_step,
+        let (max_step, u_final) = (self.loading.max_step, self.loading.u_final);
+        let (jumped, limit) = match plan.mode {
+            ControlMode::ProcessZone => (increment.abs() > max_step, max_step),
+            ControlMode::Energy => (
+                increment > max_step || lambda > u_final * (1.0 + 1e-12),
+                max_step.min(u_final - path.lambda),
+            ),
+            _ => return None,
         };
         jumped.then_some(StepFailure::LoadJump { increment, limit })
     }
