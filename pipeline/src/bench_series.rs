@@ -462,7 +462,7 @@ fn truncate(s: &str, n: usize) -> String {
 /// two-cycle ending within 1e-4) they crawled at u = 0.218 mm after 7
 /// minutes; the two-cycles' residual is ~1e-4 (docs/solver.md). Steps of
 /// 5 µm with energy 1e-10 and GMRES 1e-8 took 10-15 s each on the shared
-/// machine (some 45 minutes for the curve). `solver.linear_solver:
+/// machine (some 45 minutes for the curve). `solver.expert.linear_solver:
 /// cholesky` and `pcg` are not variants: on the symmetric part of the
 /// consistent tangent they needed so many iterations and cut-backs that R1
 /// coarse reached u = 0.035 mm in 26 steps (Cholesky) and 0.040 mm in 34
@@ -479,25 +479,31 @@ pub fn solver_variants() -> Vec<(&'static str, Vec<&'static str>)> {
         ("defaults", vec![]),
         ("residual 1e-3", vec!["solver.residual_tolerance=1e-3"]),
         ("residual 1e-5", vec!["solver.residual_tolerance=1e-5"]),
-        ("energy 1e-6", vec!["solver.energy_tolerance=1e-6"]),
+        ("energy 1e-6", vec!["solver.expert.energy_tolerance=1e-6"]),
         (
             "krylov 1e-6, fixed forcing",
-            vec!["solver.krylov_tolerance=1e-6", "solver.forcing=fixed"],
+            vec![
+                "solver.expert.krylov_tolerance=1e-6",
+                "solver.expert.forcing=fixed",
+            ],
         ),
         ("initial step 10 µm", vec!["loading.initial_step=\"10 um\""]),
         ("max step 40 µm", vec!["loading.max_step=\"40 um\""]),
-        ("growth 1.2", vec!["loading.growth=1.2"]),
-        ("growth 2", vec!["loading.growth=2"]),
-        ("constant predictor", vec!["solver.predictor=constant"]),
-        ("tangent secant", vec!["solver.tangent=secant"]),
-        ("no line search", vec!["solver.line_search=false"]),
+        ("growth 1.2", vec!["solver.expert.growth=1.2"]),
+        ("growth 2", vec!["solver.expert.growth=2"]),
+        (
+            "constant predictor",
+            vec!["solver.expert.predictor=constant"],
+        ),
+        ("tangent secant", vec!["solver.expert.tangent=secant"]),
+        ("no line search", vec!["solver.expert.line_search=false"]),
         (
             "strict stagnation rule",
-            vec!["solver.stagnation_acceptance=1"],
+            vec!["solver.expert.stagnation_acceptance=1"],
         ),
         (
             "double-precision preconditioner",
-            vec!["solver.preconditioner_precision=double"],
+            vec!["solver.expert.preconditioner_precision=double"],
         ),
         (
             "IMPL-EX concrete (tolerance 1e-2)",
@@ -523,7 +529,7 @@ pub fn solver_variants() -> Vec<(&'static str, Vec<&'static str>)> {
 /// Every solver-settings run stops after this many converged steps (the
 /// reference needs about 250): a setting that makes R1 coarse crawl is
 /// reported as not completed instead of holding the bench for hours.
-const SETTINGS_MAX_STEPS: &str = "loading.max_steps=600";
+const SETTINGS_MAX_STEPS: &str = "solver.expert.max_steps=600";
 
 /// `ribbar bench solver-settings`: see the module doc and docs/performance.md.
 pub fn solver_settings(args: &BenchArgs, printer: &Printer) -> Result<ExitCode> {

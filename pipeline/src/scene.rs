@@ -150,7 +150,12 @@ fn located_message(
     if key.is_empty() || key == "." {
         return inner;
     }
-    // The last of repeated `--set`s of a key is the one that holds.
+    with_override(&key, format!("{key}: {inner}"), overrides)
+}
+
+/// `message` about `key`, with the `--set` argument that wrote the key (or
+/// a mapping above it), if one did: the last of repeated ones, which holds.
+fn with_override(key: &str, message: String, overrides: &[String]) -> String {
     let set_by = overrides.iter().rev().find(|arg| {
         arg.split_once('=').is_some_and(|(k, _)| {
             let k = k.trim();
@@ -158,8 +163,8 @@ fn located_message(
         })
     });
     match set_by {
-        Some(arg) => format!("{key}: {inner} (from --set {arg})"),
-        None => format!("{key}: {inner}"),
+        Some(arg) => format!("{message} (from --set {arg})"),
+        None => message,
     }
 }
 
@@ -188,6 +193,16 @@ impl Scene {
                 })?;
         }
         let written = serde_json::to_value(&tree).unwrap_or(serde_json::Value::Null);
+        if let Err(e) = solve::spec::solver::moved_key(&tree) {
+            let key = match &e {
+                solve::spec::solver::SolverSpecError::Moved { key, .. } => key.clone(),
+                _ => String::new(),
+            };
+            return Err(SceneError::Yaml {
+                path: path.to_path_buf(),
+                message: with_override(&key, e.to_string(), overrides),
+            });
+        }
         let non_adhesive = take_non_adhesive(&mut tree).map_err(|message| SceneError::Yaml {
             path: path.to_path_buf(),
             message,
@@ -223,7 +238,7 @@ impl RawScene {
             },
             mesh: self.mesh.resolve()?,
             materials,
-            loading: self.loading.resolve()?,
+            loading: self.loading.resolve(&self.solver)?,
             solver,
             outputs: self.outputs.resolve()?,
             written: serde_json::Value::Null,
@@ -338,24 +353,24 @@ mod tests {
     #[test]
     fn type_errors_name_the_key_and_the_override() {
         let path = Path::new("s.yaml");
-        let in_file = format!("{SCENE}solver: {{max_iterations: abc}}\n");
+        let in_file = format!("{SCENE}solver: {{expert: {{max_iterations: abc}}}}\n");
         let err = Scene::from_yaml(&in_file, path, &[])
             .unwrap_err()
             .to_string();
         assert!(
-            err.starts_with("s.yaml: solver.max_iterations: ") && !err.contains("--set"),
+            err.starts_with("s.yaml: solver.expert.max_iterations: ") && !err.contains("--set"),
             "{err}"
         );
         let sets = [
-            "solver.max_iterations=abc".to_string(),
-            "solver.max_iterations=also wrong".to_string(),
+            "solver.expert.max_iterations=abc".to_string(),
+            "solver.expert.max_iterations=also wrong".to_string(),
         ];
         let err = Scene::from_yaml(SCENE, path, &sets)
             .unwrap_err()
             .to_string();
         assert!(
-            err.contains("solver.max_iterations: ")
-                && err.ends_with("(from --set solver.max_iterations=also wrong)"),
+            err.contains("solver.expert.max_iterations: ")
+                && err.ends_with("(from --set solver.expert.max_iterations=also wrong)"),
             "{err}"
         );
         let err = Scene::from_yaml(SCENE, path, &["bar.diameter=[8]".into()])
@@ -365,5 +380,29 @@ mod tests {
             err.contains("bar.diameter: ") && err.contains("quantity with a unit"),
             "{err}"
         );
+    }
+
+    /// A key of the earlier `loading`/`solver` layout, in the file or from
+    /// `--set`, is refused with its new place and the argument that wrote it.
+    #[test]
+    fn moved_keys_name_their_new_place() {
+        let path = Path::new("s.yaml");
+        let in_file = format!("{SCENE}solver: {{forcing: tolerance}}\n");
+        let err = Scene::from_yaml(&in_file, path, &[])
+            .unwrap_err()
+            .to_string();
+        assert_eq!(
+            err,
+            "s.yaml: solver.forcing: moved to solver.expert.forcing"
+        );
+        let err = Scene::from_yaml(SCENE, path, &["loading.growth=2".into()])
+            .unwrap_err()
+            .to_string();
+        assert_eq!(
+            err,
+            "s.yaml: loading.growth: moved to solver.expert.growth (from --set loading.growth=2)"
+        );
+        let scene = Scene::from_yaml(SCENE, path, &["solver.expert.growth=2".into()]).unwrap();
+        assert_eq!(scene.loading.growth, 2.0);
     }
 }

@@ -285,12 +285,22 @@ fn bad_input_is_reported_and_keeps_artifacts() {
             "materials.interface.mu",
         ),
         (&["--set", "mesh.h_outer=0.1 mm"], "mesh.h_outer"),
-        (&["--set", "loading.cutback=2"], "loading.cutback"),
-        (&["--set", "loading.max_steps=0"], "loading.max_steps"),
+        (
+            &["--set", "solver.expert.cutback=2"],
+            "solver.expert.cutback",
+        ),
+        (
+            &["--set", "solver.expert.max_steps=0"],
+            "solver.expert.max_steps",
+        ),
+        (
+            &["--set", "loading.cutback=0.4"],
+            "loading.cutback: moved to solver.expert.cutback",
+        ),
         (&["--set", "bar.diameter"], "KEY=VALUE"),
         (
-            &["--set", "solver.max_iterations=many"],
-            "solver.max_iterations: invalid type",
+            &["--set", "solver.expert.max_iterations=many"],
+            "solver.expert.max_iterations: invalid type",
         ),
     ];
     for (extra, needle) in cases {
@@ -333,7 +343,7 @@ fn bad_input_is_reported_and_keeps_artifacts() {
     std::fs::remove_dir_all(&work).unwrap();
 }
 
-/// `loading.max_steps` ends the solve after that many converged steps: the
+/// `solver.expert.max_steps` ends the solve after that many converged steps: the
 /// curve keeps them, solve.json says why it stopped, `run` exits non-zero,
 /// and a rerun finds the (deterministic) result up to date; `-v` shows
 /// each step's residuals.
@@ -341,13 +351,20 @@ fn bad_input_is_reported_and_keeps_artifacts() {
 fn step_limit_keeps_the_converged_steps() {
     let work = work_dir("steplimit");
     let w = work.to_str().unwrap();
-    let args = ["run", TINY, "--work", w, "--set", "loading.max_steps=3"];
+    let args = [
+        "run",
+        TINY,
+        "--work",
+        w,
+        "--set",
+        "solver.expert.max_steps=3",
+    ];
     let mut verbose = args.to_vec();
     verbose.push("-v");
     let o = ribbar(&verbose);
     let t = text(&o);
     assert_eq!(o.status.code(), Some(1), "{t}");
-    assert!(t.contains("loading.max_steps = 3"), "{t}");
+    assert!(t.contains("solver.expert.max_steps = 3"), "{t}");
     // -v: each converged step's residual history and phase times.
     assert_eq!(t.matches("relative residuals [").count(), 3, "{t}");
     assert!(t.contains("factorisation"), "{t}");

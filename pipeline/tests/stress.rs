@@ -171,7 +171,7 @@ fn extreme_parameters_never_panic_or_mislead() {
 /// The small ribbed specimen to 0.3 mm: past the adhesion peak a few
 /// sliver tets at the Mazars loading/unloading threshold hold Newton in a
 /// two-cycle. With the strict criterion
-/// (`solver.stagnation_acceptance: 1`) the stagnating attempt's flipping
+/// (`solver.expert.stagnation_acceptance: 1`) the stagnating attempt's flipping
 /// tets take their damage from the extrapolation of their history and the
 /// step is retried at the same size: the run reaches its end on the stated
 /// criteria (no step ends on a best iterate) and its energy balance holds.
@@ -187,7 +187,7 @@ fn threshold_two_cycles_are_settled_by_an_explicit_retry() {
         &work,
         &[
             "--set",
-            "solver.stagnation_acceptance=1",
+            "solver.expert.stagnation_acceptance=1",
             "--set",
             "specimen.symmetry=full",
             "--set",
@@ -203,7 +203,7 @@ fn threshold_two_cycles_are_settled_by_an_explicit_retry() {
 /// mesh, solved through the library): on its 31 MPa plateau a dozen
 /// interface points switch between sliding and sticking, or reverse their
 /// slip, at every Newton iterate, and without holds
-/// (`solver.interface_holds: off`) the run stalls there. By default
+/// (`solver.expert.interface_holds: off`) the run stalls there. By default
 /// (`on_stall`) the stall sends the run back to before its cut-backs, from
 /// where those points are held at a history and settled: it reaches its
 /// end on the stated criteria (`interface_holds_from_step` is only set by
@@ -350,7 +350,7 @@ fn impl_ex_interface_redoes_the_onset_steps_and_keeps_the_curve() {
     let (explicit, explicit_curve) = run("impl_ex", &ifx);
     let (kept, _) = run(
         "impl_ex-kept",
-        &[ifx[0], ifx[1], "--set", "solver.impl_ex_reject=1e9"],
+        &[ifx[0], ifx[1], "--set", "solver.expert.impl_ex_reject=1e9"],
     );
     assert_eq!(explicit["completed"], true);
     let summary = &explicit["summary"];
@@ -440,7 +440,7 @@ fn a_cube_that_splits_at_its_peak_ends_at_a_brittle_failure() {
 /// A Coulomb interface on a local Mazars cube that splits past its peak
 /// (stress-holdout-4's case 5): the explicit retry's damage passes do not
 /// settle the steps just past the peak, and each, within
-/// `solver.dissipation_tolerance` of its own work, leaves 1-3 % of the
+/// `solver.expert.dissipation_tolerance` of its own work, leaves 1-3 % of the
 /// reaction out of balance. Kept, they took the run's record to 1.11 % of
 /// W_ext, past the energy check of solve.json. A state that would fail
 /// that check is refused: the run ends as a result, a brittle failure with
@@ -659,7 +659,7 @@ fn a_split_whose_held_points_do_not_settle_ends_at_a_brittle_failure_at_the_peak
 /// falls, or whose forces are left out of balance, by more than the rule
 /// allows: solutions of the equilibrium equations that the laws cannot
 /// reach from the last state. Such states are refused
-/// (`solver.dissipation_tolerance`, 8 refusals here): the run ends as a
+/// (`solver.expert.dissipation_tolerance`, 8 refusals here): the run ends as a
 /// result, and no kept step gives energy back beyond the rule. (The case
 /// that showed this first, smooth-holdout case 11, where the dissipated
 /// energy fell by 1.1 % of W_ext in one state, now takes another branch
@@ -732,7 +732,7 @@ fn multigrid_preconditioned_solve_follows_the_cholesky_curve() {
     // One work dir: the three runs share the geometry and the mesh.
     let run = |preconditioner: &str| {
         let dir = &work;
-        let set = format!("solver.preconditioner={preconditioner}");
+        let set = format!("solver.expert.preconditioner={preconditioner}");
         let (out, solve) = run_tiny_ribbed(dir, &["--set", "loading.u_final=80um", "--set", &set]);
         assert!(
             out.status.success(),

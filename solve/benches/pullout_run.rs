@@ -103,8 +103,8 @@ fn main() {
     let mats: RawMaterials = serde_yaml::from_value(get("materials")).expect("materials");
     let mats = mats.resolve().expect("materials");
     let loading: RawLoading = serde_yaml::from_value(get("loading")).unwrap_or_default();
-    let loading = loading.resolve().expect("loading");
     let solver: RawSolver = serde_yaml::from_value(get("solver")).unwrap_or_default();
+    let loading = loading.resolve(&solver).expect("loading");
     let settings = solver.resolve().expect("solver");
     let model = Model::load(std::path::Path::new(&args[1])).expect("model");
     let non_adhesive: NonAdhesive = get("specimen")

@@ -881,7 +881,7 @@ fn resume_equals_uninterrupted() {
     resume_case(&m, &laws, &loading, &settings);
 }
 
-/// `solver.multigrid_rebuild: amortised` renews a hierarchy that the
+/// `solver.expert.multigrid_rebuild: amortised` renews a hierarchy that the
 /// softening interface has worn, which the half limit keeps as long as
 /// no solve needs more than half of `krylov_max_iterations`: more
 /// builds, and the curve the same to within the force tolerance's
@@ -2622,7 +2622,7 @@ fn slab_curve_loading(max_step: f64, curve_tolerance: f64, curve_error: CurveErr
     }
 }
 
-/// `loading.curve_error: stress` bounds the error of σ_mb read along FED,
+/// `solver.expert.curve_error: stress` bounds the error of σ_mb read along FED,
 /// which the chord's shortest distance understates where the curve is
 /// steep: on the synthetic pull-out, at the same tolerance, its curve
 /// comes closer along FED to a run with 2 µm steps than the default

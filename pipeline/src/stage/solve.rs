@@ -214,12 +214,12 @@ impl Observer for StageObserver<'_> {
         self.ctx.printer.line(&if kept.is_empty() {
             format!(
                 "solve: step {stalled} stalled with interface points held; starting again \
-                 with them held from step 1 (solver.interface_holds: on_stall)"
+                 with them held from step 1 (solver.expert.interface_holds: on_stall)"
             )
         } else {
             format!(
                 "solve: step {stalled} stalled; going back to step {} (u = {:.4} mm), from where \
-                 interface points that chatter may be held (solver.interface_holds: on_stall)",
+                 interface points that chatter may be held (solver.expert.interface_holds: on_stall)",
                 kept.len(),
                 checkpoint.u_imposed * 1e3
             )
@@ -456,7 +456,7 @@ fn split_outcome(
             partial,
         }) => {
             let why = format!(
-            "loading.max_steps = {max_steps} converged steps reached at imposed u = {u_imposed:e} m"
+            "solver.expert.max_steps = {max_steps} converged steps reached at imposed u = {u_imposed:e} m"
         );
             (*partial, Some(why))
         }

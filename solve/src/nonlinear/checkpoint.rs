@@ -75,7 +75,7 @@ pub struct PreconditionerState {
     pub wear: HierarchyWear,
 }
 
-/// The wear of a kept multigrid hierarchy that `solver.multigrid_rebuild:
+/// The wear of a kept multigrid hierarchy that `solver.expert.multigrid_rebuild:
 /// amortised` counts: the GMRES iterations of the first solve with it,
 /// those the solves after it needed beyond that, and whether the last
 /// rebuilds for wear paid.

@@ -8,7 +8,7 @@
 //! symmetric part is indefinite. Cholesky and PCG work on the symmetric part
 //! (or the secant matrix when that is indefinite): a quasi-Newton method
 //! with linear convergence. GMRES solves with the exact tangent (quadratic
-//! convergence), preconditioned by a factor (or, `solver.preconditioner:
+//! convergence), preconditioned by a factor (or, `solver.expert.preconditioner:
 //! multigrid`, a multigrid hierarchy) kept while GMRES needs few iterations
 //! with it.
 
@@ -212,7 +212,7 @@ impl Workspace<'_> {
         }
     }
 
-    /// Under `solver.multigrid_rebuild: amortised`, counts a solve with
+    /// Under `solver.expert.multigrid_rebuild: amortised`, counts a solve with
     /// the kept hierarchy and says whether its wear has passed what a
     /// build costs ([`super::HierarchyWear`]).
     fn worn(&mut self, info: &KrylovInfo) -> bool {

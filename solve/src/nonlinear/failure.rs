@@ -132,13 +132,13 @@ pub enum StepFailure {
         next_step: f64,
     },
     /// A converged step that gave back from the dissipated energy more
-    /// than `solver.dissipation_tolerance` of its own external work (and
+    /// than `solver.expert.dissipation_tolerance` of its own external work (and
     /// more than a floor of W_ext): the laws cannot reach its state from
     /// the last one (each of them only dissipates, but for the FCZM's
     /// non-potential exchange, a small part of a step's work), so Newton
     /// found another solution of the equilibrium equations than the
     /// path's, typically a force jump after explicit retries or holds.
-    #[error("the converged state gives back {} ({of_total_work:e} of W_ext), more than solver.dissipation_tolerance {limit}: it is not on the path of the laws. {regimes}", ShareOfStepWork { share: *.of_step_work, what: "from the dissipated energy", none: "dissipated energy" })]
+    #[error("the converged state gives back {} ({of_total_work:e} of W_ext), more than solver.expert.dissipation_tolerance {limit}: it is not on the path of the laws. {regimes}", ShareOfStepWork { share: *.of_step_work, what: "from the dissipated energy", none: "dissipated energy" })]
     CreatesEnergy {
         /// −ΔW_diss / |ΔW_ext| of the step.
         of_step_work: f64,
@@ -149,9 +149,9 @@ pub enum StepFailure {
     },
     /// A converged step (a retry whose tets' damage passes did not settle)
     /// in which the forces left out of balance did more work than
-    /// `solver.dissipation_tolerance` of the step's external work (and a
+    /// `solver.expert.dissipation_tolerance` of the step's external work (and a
     /// floor of W_ext): W_ext and W_int part by that much.
-    #[error("the converged state is out of balance: the residual forces did {} ({of_total_work:e} of W_ext), more than solver.dissipation_tolerance {limit}. {regimes}", ShareOfStepWork { share: *.of_step_work, what: "", none: "work" })]
+    #[error("the converged state is out of balance: the residual forces did {} ({of_total_work:e} of W_ext), more than solver.expert.dissipation_tolerance {limit}. {regimes}", ShareOfStepWork { share: *.of_step_work, what: "", none: "work" })]
     OutOfBalance {
         /// |Δ(W_ext − W_int)| / |ΔW_ext| of the step.
         of_step_work: f64,
@@ -163,7 +163,7 @@ pub enum StepFailure {
     /// A converged step that would take the run's energy record outside
     /// the energy check of solve.json (`crate::energy::check`): W_ext and
     /// W_int part, or the dissipated energy falls, by more than its
-    /// tolerance of W_ext, each step within `solver.dissipation_tolerance`
+    /// tolerance of W_ext, each step within `solver.expert.dissipation_tolerance`
     /// but their sum not.
     #[error("the converged state would fail the run's energy check: W_ext and W_int part by {imbalance:e} of W_ext, the dissipated energy changes by {dissipation_increment:e} of it in the step, the check allows {limit}. {regimes}")]
     FailsEnergyCheck {

@@ -81,7 +81,7 @@ pub trait Observer {
     fn step_converged(&mut self, _report: &StepReport, _state: &CommittedView<'_>) {}
     fn cutback(&mut self, _event: &Cutback) {}
     /// The run went back to the converged state `state` after step
-    /// `stalled` stalled (`solver.interface_holds: on_stall`): the steps
+    /// `stalled` stalled (`solver.expert.interface_holds: on_stall`): the steps
     /// after the state's are discarded and will be reported again.
     fn rewound(&mut self, _stalled: usize, _state: &CommittedView<'_>) {}
 }
@@ -117,7 +117,7 @@ pub enum SolveError {
         partial: Box<RunResult>,
     },
     #[error(
-        "loading.max_steps = {max_steps} converged steps reached at imposed displacement \
+        "solver.expert.max_steps = {max_steps} converged steps reached at imposed displacement \
          {u_imposed:e} m before the end of the loading"
     )]
     StepLimit {

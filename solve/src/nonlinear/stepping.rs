@@ -69,7 +69,7 @@ const STARTS_DISSIPATING: f64 = 1e-3;
 /// before it is cut back, without interface holds ...
 const RETRIES: usize = 2;
 /// ... and with its flip-flopping interface points held too
-/// (`solver.interface_holds`).
+/// (`solver.expert.interface_holds`).
 const RETRIES_WITH_HOLDS: usize = 3;
 /// Most damage passes of a retried step (`settle_explicit_damage`).
 const DAMAGE_PASSES: usize = 20;
@@ -149,7 +149,7 @@ struct Driver<'a> {
     rates: Vec<(usize, f64)>,
     /// The tets whose damage a step takes from an extrapolation of their
     /// history (IMPL-EX): every tet under `concrete_integration: impl_ex`,
-    /// else the degenerate ones (quality below `solver.sliver_quality`).
+    /// else the degenerate ones (quality below `solver.expert.sliver_quality`).
     explicit: Vec<bool>,
     /// Whether the interface points take their damage from an
     /// extrapolation of their history (`interface_integration: impl_ex`).
@@ -166,12 +166,12 @@ struct Driver<'a> {
     /// (`materials.concrete.nonlocal_length`), applied to each converged
     /// step's implicit history.
     averaging: Option<Averaging<'a>>,
-    /// Under `solver.interface_holds: on_stall`, before the holds: the
+    /// Under `solver.expert.interface_holds: on_stall`, before the holds: the
     /// path before the first cut-back since the last easy step, which a
     /// stall goes back to.
     rewind: Option<Path>,
     /// The energy balance of the converged steps, which also refuses a
-    /// state that creates energy (`solver.dissipation_tolerance`); `Err`
+    /// state that creates energy (`solver.expert.dissipation_tolerance`); `Err`
     /// says why it is not available.
     energy: Result<EnergyTracker<'a>, String>,
     /// Wall times of this invocation, and of the run before a resume.
@@ -1004,7 +1004,7 @@ impl<'a> Driver<'a> {
         }
     }
 
-    /// Reports the failed attempt and halves (by `loading.cutback`) the
+    /// Reports the failed attempt and halves (by `solver.expert.cutback`) the
     /// next try; a failure at the minimum step ends the run.
     fn cut_back(
         &mut self,
@@ -1178,7 +1178,7 @@ impl<'a> Driver<'a> {
     }
 
     /// Whether the next step may hold interface points
-    /// (`solver.interface_holds`).
+    /// (`solver.expert.interface_holds`).
     fn holds_pairs(&self, path: &Path) -> bool {
         match self.settings.interface_holds {
             InterfaceHolds::Off => false,

@@ -77,13 +77,13 @@ pub struct Summary {
     #[serde(default)]
     pub curve_max_deviation: f64,
     /// Converged states refused because they gave back dissipated energy,
-    /// or left forces out of balance, beyond `solver.dissipation_tolerance`
+    /// or left forces out of balance, beyond `solver.expert.dissipation_tolerance`
     /// (counted among the cut-backs too).
     #[serde(default)]
     pub dissipation_rejections: usize,
     /// Tets whose damage is integrated explicitly (IMPL-EX): all under
     /// `concrete_integration: impl_ex`, else the degenerate ones
-    /// (`solver.sliver_quality`).
+    /// (`solver.expert.sliver_quality`).
     #[serde(default)]
     pub explicit_tets: usize,
     /// Attempts repeated with the tets whose damage switched between
@@ -100,12 +100,12 @@ pub struct Summary {
     #[serde(default)]
     pub held_interface_points: usize,
     /// The step from which interface points may be held, under
-    /// `solver.interface_holds: on_stall`: the first that would have
+    /// `solver.expert.interface_holds: on_stall`: the first that would have
     /// stalled at its minimum size without them. (Always serialised: the
     /// checkpoint's encoding is not self-describing.)
     #[serde(default)]
     pub interface_holds_from_step: Option<usize>,
-    /// The preconditioner GMRES used (`solver.preconditioner` resolved;
+    /// The preconditioner GMRES used (`solver.expert.preconditioner` resolved;
     /// `cholesky` for the direct and PCG linear solvers).
     #[serde(default)]
     pub preconditioner: PreconditionerKind,

@@ -46,7 +46,7 @@ pub(crate) struct Workspace<'a> {
     /// Wall times of the step being attempted.
     pub(crate) wall: WallTimes,
     /// Whether the step being attempted may hold interface points, so
-    /// Newton counts their regime switches (`solver.interface_holds`).
+    /// Newton counts their regime switches (`solver.expert.interface_holds`).
     pub(crate) holds_pairs: bool,
 }
 
@@ -212,7 +212,7 @@ pub(crate) struct LinearState {
     /// The preconditioner is missing or has become poor: build it anew.
     pub(crate) refactor: bool,
     /// The kept hierarchy's wear since its build
-    /// (`solver.multigrid_rebuild: amortised`).
+    /// (`solver.expert.multigrid_rebuild: amortised`).
     pub(crate) wear: HierarchyWear,
 }
 

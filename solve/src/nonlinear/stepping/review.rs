@@ -188,7 +188,7 @@ impl Driver<'_> {
     /// workspace's trial, its retried points released), and the failure
     /// that refuses it when it gives back from the dissipated energy, or
     /// leaves forces out of balance whose work is, more than
-    /// `solver.dissipation_tolerance` of the work the step received plus
+    /// `solver.expert.dissipation_tolerance` of the work the step received plus
     /// [`DISSIPATION_FLOOR`] of W_ext, or when it would take the run's
     /// record outside the energy check of solve.json. The state is the
     /// tracker's trial until the commit accepts it.

@@ -1,18 +1,23 @@
-//! The scene's `loading` and `solver` sections: raw (as written, with units)
-//! and resolved (SI, validated, defaults filled).
+//! The scene's `loading` and `solver` sections: raw (as written, with units;
+//! `raw`) and resolved (SI, validated, defaults filled).
 //!
 //! ```
 //! use solve::spec::solver::{RawLoading, RawSolver};
 //! let l: RawLoading = serde_yaml::from_str("u_final: 0.5 mm\ninitial_step: 2 um").unwrap();
-//! let l = l.resolve().unwrap();
+//! let s: RawSolver = serde_yaml::from_str("profile: impl_ex\nexpert: {max_iterations: 30}").unwrap();
+//! let l = l.resolve(&s).unwrap();
 //! assert!((l.u_final - 0.5e-3).abs() < 1e-15);
-//! let s: RawSolver = serde_yaml::from_str("linear_solver: pcg").unwrap();
-//! assert_eq!(s.resolve().unwrap().max_iterations, 25);
+//! let s = s.resolve().unwrap();
+//! assert_eq!((s.max_iterations, s.energy_tolerance), (30, 0.5));
 //! ```
+
+mod raw;
+
+pub use raw::{moved_key, Profile, RawExpert, RawLoading, RawSolver};
 
 use crate::laws::TangentKind;
 use crate::linalg::Ordering;
-use geom::units::{Dim, RawQuantity, UnitError};
+use geom::units::UnitError;
 use serde::{Deserialize, Serialize};
 
 /// A `loading` or `solver` value that cannot be used.
@@ -28,23 +33,9 @@ pub enum SolverSpecError {
     },
     #[error("{key}: {problem}")]
     Combination { key: String, problem: &'static str },
-}
-
-/// `loading` as written.
-#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct RawLoading {
-    pub u_final: Option<RawQuantity>,
-    pub fed_stop: Option<RawQuantity>,
-    pub initial_step: Option<RawQuantity>,
-    pub min_step: Option<RawQuantity>,
-    pub max_step: Option<RawQuantity>,
-    pub growth: Option<f64>,
-    pub cutback: Option<f64>,
-    pub easy_iterations: Option<usize>,
-    pub max_steps: Option<usize>,
-    pub curve_tolerance: Option<f64>,
-    pub curve_error: Option<CurveError>,
+    /// A key of an earlier layout of the sections.
+    #[error("{key}: {place}")]
+    Moved { key: String, place: String },
 }
 
 /// Displacement-controlled loading, SI.
@@ -131,88 +122,6 @@ impl Default for Loading {
     }
 }
 
-fn positive(key: &str, v: f64) -> Result<f64, SolverSpecError> {
-    if v > 0.0 {
-        Ok(v)
-    } else {
-        Err(SolverSpecError::OutOfRange {
-            key: key.into(),
-            value: v,
-            bound: "must be > 0",
-        })
-    }
-}
-
-fn length(q: &Option<RawQuantity>, key: &str, default: f64) -> Result<f64, SolverSpecError> {
-    match q {
-        Some(q) => positive(key, q.to_si(Dim::Length, key)?),
-        None => Ok(default),
-    }
-}
-
-impl RawLoading {
-    pub fn resolve(&self) -> Result<Loading, SolverSpecError> {
-        let d = Loading::default();
-        let l = Loading {
-            u_final: length(&self.u_final, "loading.u_final", d.u_final)?,
-            fed_stop: match &self.fed_stop {
-                Some(q) => Some(positive(
-                    "loading.fed_stop",
-                    q.to_si(Dim::Length, "loading.fed_stop")?,
-                )?),
-                None => None,
-            },
-            initial_step: length(&self.initial_step, "loading.initial_step", d.initial_step)?,
-            min_step: length(&self.min_step, "loading.min_step", d.min_step)?,
-            max_step: length(&self.max_step, "loading.max_step", d.max_step)?,
-            growth: self.growth.unwrap_or(d.growth),
-            cutback: self.cutback.unwrap_or(d.cutback),
-            easy_iterations: self.easy_iterations.unwrap_or(d.easy_iterations),
-            max_steps: self.max_steps,
-            curve_tolerance: self.curve_tolerance.unwrap_or(d.curve_tolerance),
-            curve_error: self.curve_error.unwrap_or(d.curve_error),
-        };
-        let bad = |key: &str, value: f64, bound| {
-            Err(SolverSpecError::OutOfRange {
-                key: key.into(),
-                value,
-                bound,
-            })
-        };
-        if !(l.curve_tolerance >= 0.0 && l.curve_tolerance.is_finite()) {
-            return bad(
-                "loading.curve_tolerance",
-                l.curve_tolerance,
-                "must be ≥ 0 (0: off)",
-            );
-        }
-        if l.max_steps == Some(0) {
-            return bad("loading.max_steps", 0.0, "must be ≥ 1");
-        }
-        if !(l.growth >= 1.0 && l.growth.is_finite()) {
-            return bad("loading.growth", l.growth, "must be ≥ 1");
-        }
-        if !(l.cutback > 0.0 && l.cutback < 1.0) {
-            return bad("loading.cutback", l.cutback, "must be in (0, 1)");
-        }
-        if l.min_step > l.initial_step {
-            return bad(
-                "loading.min_step",
-                l.min_step,
-                "must be ≤ loading.initial_step",
-            );
-        }
-        if l.initial_step > l.max_step {
-            return bad(
-                "loading.initial_step",
-                l.initial_step,
-                "must be ≤ loading.max_step",
-            );
-        }
-        Ok(l)
-    }
-}
-
 /// Linear solver of the Newton corrections.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default)]
 #[serde(rename_all = "snake_case")]
@@ -228,37 +137,6 @@ pub enum LinearSolverKind {
     /// matrix when that part is indefinite).
     #[default]
     Gmres,
-}
-
-/// `solver` as written.
-#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct RawSolver {
-    pub residual_tolerance: Option<f64>,
-    pub energy_tolerance: Option<f64>,
-    pub max_iterations: Option<usize>,
-    pub tangent: Option<TangentKind>,
-    pub line_search: Option<bool>,
-    pub linear_solver: Option<LinearSolverKind>,
-    pub ordering: Option<Ordering>,
-    pub pcg_tolerance: Option<f64>,
-    pub pcg_max_iterations: Option<usize>,
-    pub krylov_tolerance: Option<f64>,
-    pub krylov_max_iterations: Option<usize>,
-    pub forcing: Option<Forcing>,
-    pub predictor: Option<Predictor>,
-    pub preconditioner_precision: Option<Precision>,
-    pub stagnation_acceptance: Option<f64>,
-    pub concrete_integration: Option<ConcreteIntegration>,
-    pub interface_integration: Option<InterfaceIntegration>,
-    pub impl_ex_tolerance: Option<f64>,
-    pub impl_ex_reject: Option<f64>,
-    pub path_following: Option<PathFollowing>,
-    pub sliver_quality: Option<f64>,
-    pub interface_holds: Option<InterfaceHolds>,
-    pub preconditioner: Option<PreconditionerKind>,
-    pub multigrid_rebuild: Option<MultigridRebuild>,
-    pub dissipation_tolerance: Option<f64>,
 }
 
 /// What preconditions GMRES in the Newton–Krylov solver.
@@ -431,7 +309,7 @@ pub enum InterfaceHolds {
     Always,
 }
 
-/// `solver.interface_holds` as written: a mode, or the bool of the first
+/// `solver.expert.interface_holds` as written: a mode, or the bool of the first
 /// version of the option (`true`: in every step, `false`: never).
 #[derive(Deserialize)]
 #[serde(untagged)]
@@ -451,7 +329,7 @@ impl TryFrom<RawInterfaceHolds> for InterfaceHolds {
                 "on_stall" => Ok(Self::OnStall),
                 "always" => Ok(Self::Always),
                 _ => Err(format!(
-                    "solver.interface_holds: `{m}` is not one of off, on_stall, always"
+                    "solver.expert.interface_holds: `{m}` is not one of off, on_stall, always"
                 )),
             },
         }
@@ -519,7 +397,7 @@ pub struct SolverSettings {
     /// IMPL-EX step control: after a converged step, the residual of its
     /// displacement under the implicit damage, relative to the reaction,
     /// is compared with this; above it the next step shrinks by
-    /// 0.9 √(tol/e) (at least by `loading.cutback`). Left out of the
+    /// 0.9 √(tol/e) (at least by `solver.expert.cutback`). Left out of the
     /// serialised form at its default.
     #[serde(
         default = "default_impl_ex_tolerance",
@@ -573,7 +451,7 @@ pub struct SolverSettings {
     pub dissipation_tolerance: f64,
 }
 
-/// Default of `solver.dissipation_tolerance`: above what the FCZM's
+/// Default of `solver.expert.dissipation_tolerance`: above what the FCZM's
 /// non-potential exchange gives back in the kept steps of the sweeps and
 /// holdouts (at most 0.082 of a step's work), below the force jumps it
 /// refuses (0.21 to 3.9 of their step's work; docs/solver.md).
@@ -620,19 +498,6 @@ impl SolverSettings {
     }
 }
 
-/// `v` if it lies in [0, 1), else the error naming `key`.
-fn in_unit_interval(key: &str, v: f64) -> Result<f64, SolverSpecError> {
-    if (0.0..1.0).contains(&v) {
-        Ok(v)
-    } else {
-        Err(SolverSpecError::OutOfRange {
-            key: key.into(),
-            value: v,
-            bound: "must be in [0, 1)",
-        })
-    }
-}
-
 fn is_zero(v: &f64) -> bool {
     *v == 0.0
 }
@@ -649,7 +514,7 @@ fn is_implicit_interface(c: &InterfaceIntegration) -> bool {
     *c == InterfaceIntegration::Implicit
 }
 
-/// Default of `solver.impl_ex_reject` under `interface_integration:
+/// Default of `solver.expert.impl_ex_reject` under `interface_integration:
 /// impl_ex` (docs/solver.md, "IMPL-EX interface").
 pub const DEFAULT_IMPL_EX_REJECT: f64 = 2.0;
 
@@ -696,155 +561,6 @@ impl Default for SolverSettings {
     }
 }
 
-impl RawSolver {
-    pub fn resolve(&self) -> Result<SolverSettings, SolverSpecError> {
-        let d = SolverSettings::default();
-        let unit = |key: &str, v: Option<f64>, dv: f64| -> Result<f64, SolverSpecError> {
-            let v = v.unwrap_or(dv);
-            if v > 0.0 && v < 1.0 {
-                Ok(v)
-            } else {
-                Err(SolverSpecError::OutOfRange {
-                    key: key.into(),
-                    value: v,
-                    bound: "must be in (0, 1)",
-                })
-            }
-        };
-        let count = |key: &str, v: Option<usize>, dv: usize| -> Result<usize, SolverSpecError> {
-            let v = v.unwrap_or(dv);
-            if v >= 1 {
-                Ok(v)
-            } else {
-                Err(SolverSpecError::OutOfRange {
-                    key: key.into(),
-                    value: v as f64,
-                    bound: "must be ≥ 1",
-                })
-            }
-        };
-        Ok(SolverSettings {
-            residual_tolerance: unit(
-                "solver.residual_tolerance",
-                self.residual_tolerance,
-                d.residual_tolerance,
-            )?,
-            energy_tolerance: unit(
-                "solver.energy_tolerance",
-                self.energy_tolerance,
-                d.energy_tolerance,
-            )?,
-            max_iterations: count(
-                "solver.max_iterations",
-                self.max_iterations,
-                d.max_iterations,
-            )?,
-            tangent: self.tangent.unwrap_or(d.tangent),
-            line_search: self.line_search.unwrap_or(d.line_search),
-            linear_solver: self.linear_solver.unwrap_or(d.linear_solver),
-            ordering: self.ordering.unwrap_or(d.ordering),
-            pcg_tolerance: unit("solver.pcg_tolerance", self.pcg_tolerance, d.pcg_tolerance)?,
-            pcg_max_iterations: count(
-                "solver.pcg_max_iterations",
-                self.pcg_max_iterations,
-                d.pcg_max_iterations,
-            )?,
-            krylov_tolerance: unit(
-                "solver.krylov_tolerance",
-                self.krylov_tolerance,
-                d.krylov_tolerance,
-            )?,
-            krylov_max_iterations: count(
-                "solver.krylov_max_iterations",
-                self.krylov_max_iterations,
-                d.krylov_max_iterations,
-            )?,
-            forcing: self.forcing.unwrap_or(d.forcing),
-            predictor: self.predictor.unwrap_or(d.predictor),
-            preconditioner_precision: self
-                .preconditioner_precision
-                .unwrap_or(d.preconditioner_precision),
-            stagnation_acceptance: {
-                let v = self
-                    .stagnation_acceptance
-                    .unwrap_or(d.stagnation_acceptance);
-                if v.is_finite() && v >= 1.0 {
-                    v
-                } else {
-                    return Err(SolverSpecError::OutOfRange {
-                        key: "solver.stagnation_acceptance".into(),
-                        value: v,
-                        bound: "must be ≥ 1 (a multiple of residual_tolerance)",
-                    });
-                }
-            },
-            concrete_integration: self.concrete_integration.unwrap_or(d.concrete_integration),
-            interface_integration: self
-                .interface_integration
-                .unwrap_or(d.interface_integration),
-            impl_ex_tolerance: {
-                let v = self.impl_ex_tolerance.unwrap_or(d.impl_ex_tolerance);
-                if v.is_finite() && v > 0.0 {
-                    v
-                } else {
-                    return Err(SolverSpecError::OutOfRange {
-                        key: "solver.impl_ex_tolerance".into(),
-                        value: v,
-                        bound: "must be > 0",
-                    });
-                }
-            },
-            impl_ex_reject: self.impl_ex_reject()?,
-            path_following: self.path_following.unwrap_or(d.path_following),
-            sliver_quality: in_unit_interval(
-                "solver.sliver_quality",
-                self.sliver_quality.unwrap_or(d.sliver_quality),
-            )?,
-            interface_holds: self.interface_holds.unwrap_or(d.interface_holds),
-            preconditioner: self.preconditioner(&d)?,
-            multigrid_rebuild: self.multigrid_rebuild.unwrap_or(d.multigrid_rebuild),
-            dissipation_tolerance: in_unit_interval(
-                "solver.dissipation_tolerance",
-                self.dissipation_tolerance
-                    .unwrap_or(d.dissipation_tolerance),
-            )?,
-        })
-    }
-}
-
-impl RawSolver {
-    /// `preconditioner` as given, else its default; the multigrid only
-    /// with GMRES.
-    fn preconditioner(&self, d: &SolverSettings) -> Result<PreconditionerKind, SolverSpecError> {
-        let p = self.preconditioner.unwrap_or(d.preconditioner);
-        let linear = self.linear_solver.unwrap_or(d.linear_solver);
-        if p == PreconditionerKind::Multigrid && linear != LinearSolverKind::Gmres {
-            return Err(SolverSpecError::Combination {
-                key: "solver.preconditioner".into(),
-                problem: "multigrid preconditions GMRES only: set linear_solver: gmres (the default) or leave preconditioner out",
-            });
-        }
-        Ok(p)
-    }
-
-    /// `impl_ex_reject` as given (≥ 1), else its default: on with the
-    /// interface IMPL-EX, off otherwise.
-    fn impl_ex_reject(&self) -> Result<Option<f64>, SolverSpecError> {
-        match self.impl_ex_reject {
-            Some(v) if v.is_nan() || v < 1.0 => Err(SolverSpecError::OutOfRange {
-                key: "solver.impl_ex_reject".into(),
-                value: v,
-                bound: "must be ≥ 1 (a multiple of impl_ex_tolerance)",
-            }),
-            Some(v) => Ok(Some(v)),
-            None => Ok(
-                (self.interface_integration == Some(InterfaceIntegration::ImplEx))
-                    .then_some(DEFAULT_IMPL_EX_REJECT),
-            ),
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -860,130 +576,12 @@ mod tests {
         assert_eq!(parse("false").unwrap(), InterfaceHolds::Off);
         let e = parse("sometimes").unwrap_err().to_string();
         assert!(
-            e.contains("solver.interface_holds") && e.contains("on_stall"),
+            e.contains("solver.expert.interface_holds") && e.contains("on_stall"),
             "{e}"
         );
         assert_eq!(
             serde_json::to_string(&InterfaceHolds::OnStall).unwrap(),
             "\"on_stall\""
         );
-    }
-
-    /// IMPL-EX rejection: on by default only with the interface IMPL-EX
-    /// (concrete-only IMPL-EX runs keep every converged step, as before),
-    /// settable, and a bound below the tolerance itself is refused.
-    #[test]
-    fn impl_ex_reject_defaults_with_the_interface_integration() {
-        let resolve = |y: &str| serde_yaml::from_str::<RawSolver>(y).unwrap().resolve();
-        assert_eq!(resolve("{}").unwrap().impl_ex_reject, None);
-        let concrete = resolve("concrete_integration: impl_ex").unwrap();
-        assert_eq!(concrete.impl_ex_reject, None);
-        let interface = resolve("interface_integration: impl_ex").unwrap();
-        assert_eq!(
-            interface.interface_integration,
-            InterfaceIntegration::ImplEx
-        );
-        assert_eq!(interface.impl_ex_reject, Some(DEFAULT_IMPL_EX_REJECT));
-        let set = resolve("concrete_integration: impl_ex\nimpl_ex_reject: 4").unwrap();
-        assert_eq!(set.impl_ex_reject, Some(4.0));
-        for bad in ["0.5", ".nan"] {
-            let e = resolve(&format!("impl_ex_reject: {bad}"))
-                .unwrap_err()
-                .to_string();
-            assert!(e.contains("solver.impl_ex_reject"), "{e}");
-        }
-        let e = serde_yaml::from_str::<RawSolver>("interface_integration: explicit")
-            .unwrap_err()
-            .to_string();
-        assert!(e.contains("impl_ex"), "{e}");
-    }
-
-    #[test]
-    fn unknown_key_and_bad_values_are_named() {
-        let e = serde_yaml::from_str::<RawLoading>("u_finall: 1 mm").unwrap_err();
-        assert!(e.to_string().contains("u_finall"), "{e}");
-        let l: RawLoading = serde_yaml::from_str("u_final: 1 MPa").unwrap();
-        assert!(l
-            .resolve()
-            .unwrap_err()
-            .to_string()
-            .contains("loading.u_final"));
-        let l: RawLoading = serde_yaml::from_str("cutback: 1.5").unwrap();
-        assert!(l
-            .resolve()
-            .unwrap_err()
-            .to_string()
-            .contains("loading.cutback"));
-        let s: RawSolver = serde_yaml::from_str("residual_tolerance: 0").unwrap();
-        assert!(s
-            .resolve()
-            .unwrap_err()
-            .to_string()
-            .contains("solver.residual_tolerance"));
-        for bad in ["0.5", ".nan"] {
-            let s: RawSolver =
-                serde_yaml::from_str(&format!("stagnation_acceptance: {bad}")).unwrap();
-            assert!(s
-                .resolve()
-                .unwrap_err()
-                .to_string()
-                .contains("solver.stagnation_acceptance"));
-        }
-        let s: RawSolver =
-            serde_yaml::from_str("stagnation_acceptance: 1\npreconditioner_precision: double")
-                .unwrap();
-        let s = s.resolve().unwrap();
-        assert_eq!(
-            (s.stagnation_acceptance, s.preconditioner_precision),
-            (1.0, Precision::Double)
-        );
-        let s: RawSolver = serde_yaml::from_str("tangent: secant\nordering: amd").unwrap();
-        let s = s.resolve().unwrap();
-        assert_eq!(
-            (s.tangent, s.ordering),
-            (TangentKind::Secant, Ordering::Amd)
-        );
-    }
-
-    #[test]
-    fn defaults_are_documented_values() {
-        let l = RawLoading::default().resolve().unwrap();
-        assert_eq!(l, Loading::default());
-        assert_eq!(l.u_final, 1e-3);
-    }
-
-    #[test]
-    fn auto_preconditioner_takes_the_multigrid_on_large_gmres_systems_only() {
-        let auto: SolverSettings = RawSolver::default().resolve().unwrap();
-        assert_eq!(
-            auto.preconditioner_for(MULTIGRID_MIN_DOFS - 1),
-            PreconditionerKind::Cholesky
-        );
-        assert_eq!(
-            auto.preconditioner_for(MULTIGRID_MIN_DOFS),
-            PreconditionerKind::Multigrid
-        );
-        let pcg: RawSolver = serde_yaml::from_str("linear_solver: pcg").unwrap();
-        let pcg = pcg.resolve().unwrap();
-        assert_eq!(
-            pcg.preconditioner_for(10 * MULTIGRID_MIN_DOFS),
-            PreconditionerKind::Cholesky
-        );
-        let chosen: RawSolver = serde_yaml::from_str("preconditioner: cholesky").unwrap();
-        let chosen = chosen.resolve().unwrap();
-        assert_eq!(
-            chosen.preconditioner_for(10 * MULTIGRID_MIN_DOFS),
-            PreconditionerKind::Cholesky
-        );
-        let bad: RawSolver =
-            serde_yaml::from_str("preconditioner: multigrid\nlinear_solver: cholesky").unwrap();
-        let e = bad.resolve().unwrap_err().to_string();
-        assert!(
-            e.contains("solver.preconditioner") && e.contains("gmres"),
-            "{e}"
-        );
-        // The default stays out of the serialised settings (cache keys).
-        let yaml = serde_yaml::to_string(&auto).unwrap();
-        assert!(!yaml.contains("preconditioner:"), "{yaml}");
     }
 }
