@@ -255,8 +255,8 @@ fn a_stall_goes_back_and_holds_the_interface_points_that_chatter() {
     assert!(whole.summary.held_interface_points > 0);
     let back = grab.0.expect("the run went back");
     let from = whole.summary.interface_holds_from_step;
-    assert_eq!(from, Some(back.rows.len() + 1));
-    assert_eq!(back.summary.interface_holds_from_step, from);
+    assert_eq!(from, Some(back.state.path.rows.len() + 1));
+    assert_eq!(back.state.policy.holds_from_step, from);
     let resumed = run(&scene.solver, Some(back), &mut Silent).unwrap();
     assert_eq!(whole.rows, resumed.rows);
     std::fs::remove_dir_all(&work).unwrap();

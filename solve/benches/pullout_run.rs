@@ -39,7 +39,7 @@ impl Observer for Print {
                 cp.save(path).expect("checkpoint");
             }
         }
-        let s = cp.summary;
+        let s = cp.state.summary;
         let (kr, fa) = (
             s.krylov_iterations - self.krylov,
             s.factorisations - self.factorisations,

@@ -15,8 +15,8 @@ use solve::laws::{AnyBulkLaw, AnyInterfaceLaw};
 use solve::laws::{BulkLaw, InterfaceLaw, InterfaceState, TangentKind};
 use solve::linalg::Ordering;
 use solve::nonlinear::{
-    run, CommittedView, CurveRow, Dirichlet, Ending, Measurement, Observer, Problem, Silent,
-    SolveError, StepFailure, StepReport,
+    run, CommittedView, CurveRow, Dirichlet, Ending, Measurement, NotConverged, Observer, Problem,
+    Refusal, Silent, SolveError, StepFailure, StepReport,
 };
 use solve::problems::pullout::solve_pullout;
 use solve::spec::solver::{
@@ -282,7 +282,7 @@ fn patch_test_uniform_strain_on_perturbed_mesh() {
         &mut Silent,
     )
     .unwrap();
-    let u = &res.last.u;
+    let u = &res.last.state.path.u;
     for (n, p) in m.nodes.iter().enumerate() {
         let v = ux(*p);
         for c in 0..3 {
@@ -1047,11 +1047,14 @@ fn diverging_case_keeps_converged_steps() {
         }) => {
             // Two iterations per attempt: the typed cause says so.
             assert!(
-                matches!(*cause, StepFailure::IterationLimit { iterations: 2, .. }),
+                matches!(
+                    *cause,
+                    StepFailure::NotConverged(NotConverged::IterationLimit { iterations: 2, .. })
+                ),
                 "{cause}"
             );
             assert_eq!(step, partial.rows.len() + 1);
-            assert!(u_imposed > partial.last.u_imposed);
+            assert!(u_imposed > partial.last.state.path.lambda);
             assert!(!residual_history.is_empty());
             assert!(partial.summary.cutbacks >= 2);
             let msg = SolveError::Stalled {
@@ -1097,8 +1100,24 @@ fn vtu_fields_are_written() {
     let dir = std::env::temp_dir().join(format!("ribbar-vtu-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let (b, i) = (dir.join("bulk.vtu"), dir.join("interface.vtu"));
-    solve::fields::write_bulk_vtu(&b, &m, &laws, &res.last.u, &res.last.states, None).unwrap();
-    solve::fields::write_interface_vtu(&i, &m, &laws, &res.last.u, &res.last.states, None).unwrap();
+    solve::fields::write_bulk_vtu(
+        &b,
+        &m,
+        &laws,
+        &res.last.state.path.u,
+        &res.last.state.path.states,
+        None,
+    )
+    .unwrap();
+    solve::fields::write_interface_vtu(
+        &i,
+        &m,
+        &laws,
+        &res.last.state.path.u,
+        &res.last.state.path.states,
+        None,
+    )
+    .unwrap();
     let (bt, it) = (
         std::fs::read_to_string(&b).unwrap(),
         std::fs::read_to_string(&i).unwrap(),
@@ -1313,9 +1332,24 @@ fn assert_part_equals_the_whole_it_unfolds_to(half: &Model, name: &str) {
             dir.join(format!("{name}_bulk.vtu")),
             dir.join(format!("{name}_interface.vtu")),
         );
-        solve::fields::write_bulk_vtu(&b, model, &laws, &r.last.u, &r.last.states, whole).unwrap();
-        solve::fields::write_interface_vtu(&i, model, &laws, &r.last.u, &r.last.states, whole)
-            .unwrap();
+        solve::fields::write_bulk_vtu(
+            &b,
+            model,
+            &laws,
+            &r.last.state.path.u,
+            &r.last.state.path.states,
+            whole,
+        )
+        .unwrap();
+        solve::fields::write_interface_vtu(
+            &i,
+            model,
+            &laws,
+            &r.last.state.path.u,
+            &r.last.state.path.states,
+            whole,
+        )
+        .unwrap();
         (
             std::fs::read_to_string(b).unwrap(),
             std::fs::read_to_string(i).unwrap(),
@@ -1353,7 +1387,7 @@ fn assert_part_equals_the_whole_it_unfolds_to(half: &Model, name: &str) {
         }
     }
     // The fields: the whole's displacement is the mirror image of the half's.
-    let (uh, uw) = (&h.last.u, &w.last.u);
+    let (uh, uw) = (&h.last.state.path.u, &w.last.state.path.u);
     let scale = uw.iter().fold(0.0f64, |m, v| m.max(v.abs()));
     for (i, &src) in whole.node_source.iter().enumerate() {
         for c in 0..3 {
@@ -1778,7 +1812,7 @@ fn dissipation_control_follows_a_snap_back() {
     // uninterrupted run.
     let mut grab = observed.step3;
     assert_eq!(grab.len(), 2, "step 3 in the first and the last pass");
-    assert_eq!(grab[0].summary.interface_holds_from_step, None);
+    assert_eq!(grab[0].state.policy.holds_from_step, None);
     for cp in [grab.swap_remove(0), grab.pop().unwrap()] {
         let resumed = solve_pullout(
             &m,
@@ -2217,7 +2251,15 @@ fn prism_work(nz: usize, nonlocal_length: Option<f64>) -> (f64, Vec<f64>) {
         before = (row.u_imposed, row.force);
     }
     // Six tets per cell.
-    let damage = r.last.states.bulk.chunks(6).map(|c| c[0].damage).collect();
+    let damage = r
+        .last
+        .state
+        .path
+        .states
+        .bulk
+        .chunks(6)
+        .map(|c| c[0].damage)
+        .collect();
     (work, damage)
 }
 
@@ -2337,7 +2379,7 @@ fn gradient_damage_resumes_bit_for_bit() {
         full.rows
     );
     let damage = |s: &States| s.bulk.iter().map(|b| b.damage).sum::<f64>();
-    assert!(damage(&full.last.states) > damage(&checkpoint.states) + 1.0);
+    assert!(damage(&full.last.state.path.states) > damage(&checkpoint.state.path.states) + 1.0);
     let resumed = run_prism(prism, &loading, Some(checkpoint), &mut Silent);
     assert_eq!(full.rows, resumed.rows);
 }
@@ -2449,11 +2491,11 @@ fn impl_ex_snap_back(
             &m,
             &laws,
             EnergyStart {
-                u: &cp.u,
-                states: &cp.states,
+                u: &cp.state.path.u,
+                states: &cp.state.path.states,
                 rows: Vec::<EnergyRow>::new(),
-                lambda: cp.u_imposed,
-                force: cp.rows.last().unwrap().force,
+                lambda: cp.state.path.lambda,
+                force: cp.state.path.rows.last().unwrap().force,
             },
         )
         .unwrap(),
@@ -2517,7 +2559,10 @@ fn process_zone_control_follows_a_snap_back_under_impl_ex() {
     // A run resumed from a checkpoint taken while the zone holds the
     // steps goes on as the uninterrupted one, bit for bit.
     let cp = zone.kept.expect("a checkpoint at step 60");
-    assert_eq!(cp.control_mode, solve::nonlinear::ControlMode::ProcessZone);
+    assert_eq!(
+        cp.state.policy.steps.mode,
+        solve::nonlinear::ControlMode::ProcessZone
+    );
     let resumed = impl_ex_snap_back(PathFollowing::ProcessZone, 1e-2, 0, Some(cp));
     let rows = &result.rows[60..];
     assert_eq!(resumed.result.unwrap().rows[60..], *rows);
@@ -2541,7 +2586,7 @@ fn process_zone_hands_steps_that_move_the_load_far_to_displacement_control() {
             self.curve.push((r.row.u_imposed, r.row.force));
         }
         fn cutback(&mut self, c: &solve::nonlinear::Cutback) {
-            if let StepFailure::LoadJump { increment, limit } = c.reason {
+            if let StepFailure::Refused(Refusal::LoadJump { increment, limit }) = c.reason {
                 assert!(increment.abs() > limit);
                 self.load_jumps += 1;
             }
@@ -2689,4 +2734,75 @@ fn curve_tolerance_resolves_the_adhesion_peak() {
     // The step the curve allows travels with the checkpoint: a run resumed
     // next to the peak, where it sizes the steps, gives the same curve.
     resume_at(5, &m, &laws, &loading(4e-5, 3e-3), &settings);
+}
+
+/// A run resumed from the checkpoint of any committed step, or of the
+/// state a stall went back to, takes the uninterrupted run's decisions and
+/// gives its curve and energy record bit for bit (SPEC §6 resume;
+/// docs/architecture.md, "The stepping policy": everything the policy
+/// remembers is in the checkpoint). The defaults on `snap_back_case` pass
+/// through cut-backs, a stall that goes back to before them (the rewind
+/// point), a second stall that starts again with the interface points
+/// held from step 1, and the hand-over to dissipation control that follows
+/// the snap-back to the end.
+#[test]
+fn a_run_resumed_after_any_step_equals_the_uninterrupted_one() {
+    struct Every {
+        checkpoints: Vec<solve::nonlinear::Checkpoint>,
+        modes: Vec<solve::nonlinear::ControlMode>,
+        cutbacks: usize,
+        rewinds: usize,
+    }
+    impl Observer for Every {
+        fn step_converged(&mut self, r: &StepReport, v: &CommittedView<'_>) {
+            self.checkpoints.push((v.checkpoint)());
+            self.modes.push(r.mode);
+        }
+        fn cutback(&mut self, _: &solve::nonlinear::Cutback) {
+            self.cutbacks += 1;
+        }
+        fn rewound(&mut self, _: usize, v: &CommittedView<'_>) {
+            self.checkpoints.push((v.checkpoint)());
+            self.rewinds += 1;
+        }
+    }
+    let (m, laws, loading) = snap_back_case();
+    let settings = SolverSettings::default();
+    let mut every = Every {
+        checkpoints: Vec::new(),
+        modes: Vec::new(),
+        cutbacks: 0,
+        rewinds: 0,
+    };
+    let whole = solve_pullout(&m, &laws, &loading, &settings, None, &mut every).unwrap();
+    // The path this test is about: cut-backs, two goings back, and
+    // dissipation control.
+    assert!(
+        every.cutbacks > 0 && every.rewinds >= 2,
+        "{} cut-backs, {} rewinds",
+        every.cutbacks,
+        every.rewinds
+    );
+    assert!(every.modes.contains(&solve::nonlinear::ControlMode::Energy));
+    let dir = std::env::temp_dir().join(format!("ribbar-resume-every-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("state.bin");
+    let mut differ = Vec::new();
+    for (k, cp) in every.checkpoints.into_iter().enumerate() {
+        // Through the file, as a stage resumes.
+        cp.save(&file).unwrap();
+        let cp = solve::nonlinear::Checkpoint::load(&file).unwrap();
+        let resumed = solve_pullout(&m, &laws, &loading, &settings, Some(cp), &mut Silent).unwrap();
+        if resumed.rows != whole.rows
+            || resumed.energy != whole.energy
+            || resumed.ending != whole.ending
+        {
+            differ.push(k + 1);
+        }
+    }
+    std::fs::remove_dir_all(&dir).ok();
+    assert!(
+        differ.is_empty(),
+        "resumed after the events {differ:?}: another curve"
+    );
 }

@@ -210,7 +210,7 @@ impl Observer for StageObserver<'_> {
     fn rewound(&mut self, stalled: usize, view: &CommittedView<'_>) {
         // Built once: the state to go back to is also what is saved.
         let checkpoint = (view.checkpoint)();
-        let kept = &checkpoint.rows;
+        let kept = &checkpoint.state.path.rows;
         self.ctx.printer.line(&if kept.is_empty() {
             format!(
                 "solve: step {stalled} stalled with interface points held; starting again \
@@ -221,7 +221,7 @@ impl Observer for StageObserver<'_> {
                 "solve: step {stalled} stalled; going back to step {} (u = {:.4} mm), from where \
                  interface points that chatter may be held (solver.expert.interface_holds: on_stall)",
                 kept.len(),
-                checkpoint.u_imposed * 1e3
+                checkpoint.state.path.lambda * 1e3
             )
         });
         let discarded = |step: usize| step > kept.len();
@@ -392,8 +392,8 @@ fn load_checkpoint(ctx: &Ctx, checkpoint_path: &Path) -> Option<Checkpoint> {
             Ok(cp) => {
                 ctx.printer.line(&format!(
                     "solve: resuming after step {} (u = {:.4} mm)",
-                    cp.rows.len(),
-                    cp.u_imposed * 1e3
+                    cp.state.path.rows.len(),
+                    cp.state.path.lambda * 1e3
                 ));
                 Some(cp)
             }
@@ -412,20 +412,24 @@ fn load_checkpoint(ctx: &Ctx, checkpoint_path: &Path) -> Option<Checkpoint> {
 /// The first peak of a resumed run's converged steps and whether the
 /// curve has already dropped past it (the peak fields are then written).
 fn peak_before(checkpoint: Option<&Checkpoint>) -> Result<(f64, bool)> {
-    Ok(match checkpoint.filter(|cp| !cp.rows.is_empty()) {
-        Some(cp) => {
-            let (first, _, step) = crate::post::first_peak_bond_stress(&cp.rows)?;
-            (
-                first,
-                step < cp.rows.len()
-                    && cp
-                        .rows
-                        .iter()
-                        .any(|r| r.bond_stress < (1.0 - crate::post::FIRST_PEAK_DROP) * first),
-            )
-        }
-        None => (f64::NEG_INFINITY, false),
-    })
+    Ok(
+        match checkpoint.filter(|cp| !cp.state.path.rows.is_empty()) {
+            Some(cp) => {
+                let (first, _, step) = crate::post::first_peak_bond_stress(&cp.state.path.rows)?;
+                (
+                    first,
+                    step < cp.state.path.rows.len()
+                        && cp
+                            .state
+                            .path
+                            .rows
+                            .iter()
+                            .any(|r| r.bond_stress < (1.0 - crate::post::FIRST_PEAK_DROP) * first),
+                )
+            }
+            None => (f64::NEG_INFINITY, false),
+        },
+    )
 }
 
 /// The converged steps of a run and, when it stopped early, why: a stall
@@ -472,7 +476,7 @@ fn write_end_fields(
 ) -> Result<()> {
     if let Some(row) = result.rows.last() {
         let cp = &result.last;
-        observer.write_fields("end", row, model, (&cp.u, &cp.states))?;
+        observer.write_fields("end", row, model, (&cp.state.path.u, &cp.state.path.states))?;
     }
     Ok(())
 }

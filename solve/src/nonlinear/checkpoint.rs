@@ -1,10 +1,8 @@
 //! Everything needed to restart a run from a converged step, saved
 //! atomically (bincode behind a format tag).
 
-use super::control::ControlMode;
+use super::policy::{ConvergedPath, PolicyState};
 use super::summary::Summary;
-use crate::assembly::States;
-use crate::curve::CurveRow;
 use crate::elements::interface::INTERFACE_POINTS;
 use crate::energy::EnergyRow;
 use crate::fields::ProfileRow;
@@ -13,40 +11,29 @@ use mesh::Model;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
+/// Everything a run carries from one step to the next: its converged
+/// path, the stepping policy's state and the summary so far.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RunState {
+    pub path: ConvergedPath,
+    pub policy: PolicyState,
+    pub summary: Summary,
+}
+
 /// Everything needed to restart from a converged step.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Checkpoint {
     pub n_nodes: usize,
     pub n_tets: usize,
     pub n_interfaces: usize,
-    /// λ of the last converged step, m.
-    pub u_imposed: f64,
-    /// Size of the next step to try, m, in the unit `control_mode` says.
-    pub next_step: f64,
-    /// The largest next displacement-controlled step the curve's bend
-    /// allows (`loading.curve_tolerance`), m; infinite when it sets none.
-    pub curve_step: f64,
-    /// What the steps prescribe at this point of the run.
-    pub control_mode: ControlMode,
-    /// Global displacement, m.
-    pub u: Vec<f64>,
-    pub states: States,
-    pub rows: Vec<CurveRow>,
-    pub summary: Summary,
+    /// The run's state, whole: a run resumed from it takes the decisions
+    /// the uninterrupted run takes.
+    pub state: RunState,
     /// The matrix whose factor preconditions the next linear solves (PCG
     /// and GMRES keep one across steps); a resumed run factorises exactly
     /// these values, so its iterates equal the uninterrupted run's bit for
     /// bit. `None` when no factor is kept (Cholesky mode, or none yet).
     pub preconditioner: Option<PreconditionerState>,
-    /// Global displacement increment of the last converged step (m; empty
-    /// before the first), for the extrapolating predictor.
-    pub last_increment: Vec<f64>,
-    /// Increment of λ in the last converged step, m (0 before the first).
-    pub last_step: f64,
-    /// The generalised load Σ rate_a f_int,a of the last converged step,
-    /// N, and its increment in that step (dissipation control).
-    pub generalised_load: f64,
-    pub last_load_increment: f64,
     /// Energy balance, one row per converged step (empty when it could not
     /// be evaluated, see `RunResult::energy`).
     pub energy: Vec<EnergyRow>,
@@ -181,7 +168,7 @@ pub enum CheckpointError {
     Corrupt { path: String, detail: String },
 }
 
-const CHECKPOINT_MAGIC: u64 = 0x7269_6262_6172_000d;
+const CHECKPOINT_MAGIC: u64 = 0x7269_6262_6172_000e;
 
 impl Checkpoint {
     /// Writes atomically (temporary file then rename), bincode.
@@ -221,12 +208,15 @@ impl Checkpoint {
     /// `Err` with what differs when this checkpoint was not taken on
     /// `model` (with `n_dofs` global DOFs).
     pub(crate) fn check_matches(&self, model: &Model, n_dofs: usize) -> Result<(), String> {
+        let path = &self.state.path;
+        let increment = path.last_increment.len();
         if self.n_nodes != model.nodes.len()
             || self.n_tets != model.tets.len()
             || self.n_interfaces != model.interfaces.len()
-            || self.u.len() != n_dofs
-            || self.states.bulk.len() != model.tets.len()
-            || self.states.interface.len() != INTERFACE_POINTS * model.interfaces.len()
+            || path.u.len() != n_dofs
+            || !(increment == 0 || increment == n_dofs)
+            || path.states.bulk.len() != model.tets.len()
+            || path.states.interface.len() != INTERFACE_POINTS * model.interfaces.len()
         {
             return Err(format!(
                 "checkpoint has {} nodes, {} tets, {} interface elements; model has {}, {}, {}",

@@ -12,31 +12,41 @@
 //! multigrid`, a multigrid hierarchy) kept while GMRES needs few iterations
 //! with it.
 
-use super::control::{Border, BorderedPreconditioner};
+use super::control::{Border, BorderedPreconditioner, Indirect};
 use super::workspace::{Kept, Workspace};
 use crate::assembly::{Outputs, States, Tangents};
 use crate::laws::TangentKind;
-use crate::linalg::{gmres, pcg, KrylovInfo, LinearError, Preconditioner, SplitMatrix, SymLower};
-use crate::spec::solver::{LinearSolverKind, MultigridRebuild};
+use crate::linalg::{
+    dot, gmres, norm, pcg, KrylovInfo, LinearError, Preconditioner, SplitMatrix, SymLower,
+};
+use crate::spec::solver::{Forcing, LinearSolverKind, MultigridRebuild, SolverSettings};
 use std::time::Instant;
 
+/// A linear solve a Newton iteration asks for: the right-hand side, the
+/// Krylov relative tolerance, and under indirect control the border (then
+/// the right-hand side and the correction hold one more entry: the
+/// constraint row, the load-factor increment).
+#[derive(Clone, Copy)]
+pub(crate) struct Request<'a> {
+    pub(crate) rhs: &'a [f64],
+    pub(crate) eta: f64,
+    pub(crate) border: Option<&'a Border<'a>>,
+}
+
 impl Workspace<'_> {
-    /// Solves for the Newton correction `du` of the right-hand side `rhs`
-    /// at iterate `u` (from `start`) with the configured linear solver;
-    /// `eta` is the Krylov relative tolerance. With a `border`, `rhs` and
-    /// `du` hold one more entry (the constraint row, the load-factor
-    /// increment).
+    /// Solves for the Newton correction `du` of the `request` at iterate
+    /// `u` (from `start`) with the configured linear solver.
     pub(crate) fn correction(
         &mut self,
         start: &States,
         u: &[f64],
-        (rhs, du): (&[f64], &mut [f64]),
-        eta: f64,
-        border: Option<&Border<'_>>,
+        request: Request<'_>,
+        du: &mut [f64],
     ) -> Result<(), LinearError> {
         if self.settings.linear_solver == LinearSolverKind::Gmres {
-            return self.newton_krylov(start, u, (rhs, du), eta, border);
+            return self.newton_krylov(start, u, request, du);
         }
+        let Request { rhs, border, .. } = request;
         if !self.upper.is_empty() {
             // Unsymmetric consistent tangent: keep its symmetric part.
             for (v, w) in self.lower.iter_mut().zip(&self.upper) {
@@ -139,9 +149,8 @@ impl Workspace<'_> {
         &mut self,
         start: &States,
         u: &[f64],
-        (rhs, du): (&[f64], &mut [f64]),
-        eta: f64,
-        border: Option<&Border<'_>>,
+        request: Request<'_>,
+        du: &mut [f64],
     ) -> Result<(), LinearError> {
         let lower = std::mem::take(&mut self.lower);
         let upper = std::mem::take(&mut self.upper);
@@ -156,7 +165,7 @@ impl Workspace<'_> {
         let out = (|| {
             if self.lin.kept.is_ready()
                 && !self.lin.refactor
-                && self.try_gmres(a, border, rhs, du, eta).is_ok()
+                && self.try_gmres(a, request, du).is_ok()
             {
                 return Ok(());
             }
@@ -166,14 +175,14 @@ impl Workspace<'_> {
             self.lin.preconditioner = pvals;
             res?;
             self.lin.refactor = false;
-            if self.try_gmres(a, border, rhs, du, eta).is_ok() {
+            if self.try_gmres(a, request, du).is_ok() {
                 return Ok(());
             }
             self.lin.refactor = true;
             if matches!(self.lin.kept, Kept::Multigrid { .. }) {
-                return self.multigrid_fallback(start, u, a, (rhs, du), eta, border);
+                return self.multigrid_fallback(start, u, a, request, du);
             }
-            self.factor_solve(rhs, du, border)
+            self.factor_solve(request.rhs, du, request.border)
         })();
         self.lower = lower;
         self.upper = upper;
@@ -184,11 +193,10 @@ impl Workspace<'_> {
     fn try_gmres(
         &mut self,
         a: SplitMatrix<'_>,
-        border: Option<&Border<'_>>,
-        rhs: &[f64],
+        request: Request<'_>,
         du: &mut [f64],
-        eta: f64,
     ) -> Result<(), LinearError> {
+        let Request { rhs, eta, border } = request;
         let max = self.settings.krylov_max_iterations;
         let t = Instant::now();
         let res = match border {
@@ -234,9 +242,8 @@ impl Workspace<'_> {
         start: &States,
         u: &[f64],
         a: SplitMatrix<'_>,
-        (rhs, du): (&[f64], &mut [f64]),
-        eta: f64,
-        border: Option<&Border<'_>>,
+        request: Request<'_>,
+        du: &mut [f64],
     ) -> Result<(), LinearError> {
         let mut values = std::mem::take(&mut self.lin.preconditioner);
         let res = self
@@ -244,7 +251,7 @@ impl Workspace<'_> {
             .and_then(|()| self.factorize(&values));
         self.lin.preconditioner = values;
         res?;
-        if self.try_gmres(a, border, rhs, du, eta).is_ok() {
+        if self.try_gmres(a, request, du).is_ok() {
             return Ok(());
         }
         let values = std::mem::take(&mut self.lin.preconditioner);
@@ -255,7 +262,7 @@ impl Workspace<'_> {
             upper: &values,
         };
         // The secant system's own error: what the last fallback reached.
-        let res = self.try_gmres(secant, border, rhs, du, eta);
+        let res = self.try_gmres(secant, request, du);
         self.lin.preconditioner = values;
         res
     }
@@ -281,5 +288,139 @@ impl Workspace<'_> {
             .map_err(|_| LinearError::NonFinite)?;
         self.wall.add_eval(&e);
         Ok(())
+    }
+}
+
+impl Workspace<'_> {
+    /// The correction of the bordered system (see `control`): right-hand
+    /// side (r, −s g) with the constraint row scaled by s = ‖k_λ‖/‖(gᵤ, g_λ)‖,
+    /// so that GMRES weighs both alike; `du` receives (Δu, Δλ).
+    pub(crate) fn bordered_correction(
+        &mut self,
+        start: &States,
+        u: &[f64],
+        c: &Indirect<'_>,
+        r: &[f64],
+        du: &mut [f64],
+        eta: f64,
+    ) -> Result<(), LinearError> {
+        let load = self.load.take().unwrap_or_default();
+        let n = r.len();
+        let mut rhs = vec![0.0; n + 1];
+        let mut row = std::mem::take(&mut self.constraint_row);
+        row.resize(n, 0.0);
+        let row_lambda = c.constraint.gradient(&load, &mut row);
+        let g_norm = (dot(&row, &row) + row_lambda * row_lambda).sqrt();
+        let scale = match norm(&load.column) / g_norm {
+            s if s.is_finite() && s > 0.0 => s,
+            _ => 1.0,
+        };
+        rhs[..n].copy_from_slice(r);
+        rhs[n] = -scale * c.constraint.residual(u, c.lambda, &self.f_int);
+        let border = Border {
+            column: &load.column,
+            row: &row,
+            row_lambda,
+            scale,
+        };
+        let request = Request {
+            rhs: &rhs,
+            eta,
+            border: Some(&border),
+        };
+        let out = self.correction(start, u, request, du);
+        self.load = Some(load);
+        self.constraint_row = row;
+        out
+    }
+}
+
+/// GMRES relative tolerance of correction `k` (see [`Forcing`]); `rnorm`
+/// is the current residual norm, `r_prev` the one the previous correction
+/// started from (N), `scale` the force scale of the residual criterion.
+pub(crate) fn forcing_term(
+    settings: &SolverSettings,
+    k: usize,
+    rnorm: f64,
+    r_prev: f64,
+    eta_prev: f64,
+    scale: f64,
+) -> f64 {
+    const ETA_MAX: f64 = 0.1;
+    let floor = settings.krylov_tolerance;
+    match settings.forcing {
+        Forcing::Fixed => floor,
+        Forcing::EisenstatWalker => {
+            let eta = if k == 0 || r_prev <= 0.0 {
+                ETA_MAX
+            } else {
+                let ratio = rnorm / r_prev;
+                let mut e = 0.9 * ratio * ratio;
+                // Safeguard against a sudden drop after a lucky iterate.
+                let carried = 0.9 * eta_prev * eta_prev;
+                if carried > 0.1 {
+                    e = e.max(carried);
+                }
+                e
+            };
+            eta.min(ETA_MAX).max(floor)
+        }
+        Forcing::Tolerance => {
+            let aim = 0.5 * settings.residual_tolerance * scale / rnorm;
+            if aim.is_finite() {
+                aim.min(ETA_MAX).max(floor)
+            } else {
+                floor
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The Eisenstat–Walker forcing term (choice 2) stays within
+    /// [`krylov_tolerance`, 0.1], starts a step at 0.1, follows
+    /// 0.9 (‖r_k‖/‖r_{k−1}‖)² in between, and `fixed` forcing is constant
+    /// (SPEC §6: inexact Newton corrections; Eisenstat & Walker 1996).
+    #[test]
+    fn forcing_term_follows_eisenstat_walker_within_bounds() {
+        let ew = SolverSettings::default();
+        assert_eq!(ew.forcing, Forcing::EisenstatWalker);
+        let f = |k, r, rp, ep| forcing_term(&ew, k, r, rp, ep, 1.0);
+        assert_eq!(f(0, 1.0, 0.0, 0.0), 0.1);
+        // Ratio 0.2: 0.9·0.04 = 0.036.
+        assert!((f(1, 0.2, 1.0, 0.1) - 0.036).abs() < 1e-15);
+        // A slow decrease is capped at 0.1, a fast one floored at 1e-3.
+        assert_eq!(f(2, 0.9, 1.0, 0.1), 0.1);
+        assert_eq!(f(3, 1e-3, 1.0, 0.01), ew.krylov_tolerance);
+        // Safeguard: a previous η of 0.4 keeps η ≥ 0.9·0.16 = 0.144 → cap.
+        assert_eq!(f(4, 1e-2, 1.0, 0.4), 0.1);
+        let fixed = SolverSettings {
+            forcing: Forcing::Fixed,
+            ..ew
+        };
+        assert_eq!(forcing_term(&fixed, 3, 0.5, 1.0, 0.1, 1.0), 1e-3);
+    }
+
+    /// `tolerance` forcing aims each correction at half the force
+    /// criterion (tol_r · scale / ‖r‖ / 2) within [`krylov_tolerance`, 0.1],
+    /// whatever the previous corrections did.
+    #[test]
+    fn forcing_term_aims_at_the_force_criterion() {
+        let aim = SolverSettings {
+            forcing: Forcing::Tolerance,
+            residual_tolerance: 1e-4,
+            ..SolverSettings::default()
+        };
+        let f = |k, r, scale| forcing_term(&aim, k, r, 1.0, 0.1, scale);
+        // ‖r‖ = 7e-3 of a 2 kN reaction: 0.5e-4 / 7e-3.
+        assert!((f(0, 14.0, 2e3) - 0.5e-4 / 7e-3).abs() < 1e-15);
+        assert_eq!(f(1, 14.0, 2e3), f(0, 14.0, 2e3));
+        // Near the criterion at most 0.1, far from it at least 1e-3.
+        assert_eq!(f(1, 1.2e-4, 1.0), 0.1);
+        assert_eq!(f(0, 1.0, 1.0), aim.krylov_tolerance);
+        assert_eq!(f(0, 0.0, 1.0), aim.krylov_tolerance);
     }
 }

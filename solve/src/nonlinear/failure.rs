@@ -1,5 +1,5 @@
-//! Why a Newton attempt failed (the step is cut back) and why a run ended
-//! early (the converged part is kept).
+//! Why a step's attempt was not committed: Newton did not converge
+//! ([`NotConverged`]), or a check refused the converged state ([`Refusal`]).
 
 use crate::assembly::{AssemblyError, States};
 use crate::linalg::LinearError;
@@ -53,9 +53,10 @@ impl std::fmt::Display for RegimeChanges {
     }
 }
 
-/// Why a Newton attempt failed.
+/// Why a Newton attempt did not reach an equilibrium: the step is cut back
+/// or retried.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
-pub enum StepFailure {
+pub enum NotConverged {
     /// A law or element could not evaluate an iterate.
     #[error("constitutive failure{}: {source}", if *.in_line_search { " in line search" } else { "" })]
     Constitutive {
@@ -85,14 +86,6 @@ pub enum StepFailure {
         source: LinearError,
         regimes: RegimeChanges,
     },
-    /// Under indirect control the controlled quantity no longer responds
-    /// to the load factor: a limit load (the bar yields over its section)
-    /// or parts that separate without resistance.
-    #[error("the controlled free-end displacement does not respond to the imposed displacement (dFED/du = {slope:e}): a limit load or a separation")]
-    ControlSingular {
-        /// d(quantity)/dλ at fixed equilibrium, dimensionless.
-        slope: f64,
-    },
     /// The interface points held for a retried step did not come to
     /// rest: held at the history their laws reach at the converged jumps,
     /// the displacement is still out of balance after every pass.
@@ -103,6 +96,18 @@ pub enum StepFailure {
         relative_residual: f64,
         regimes: RegimeChanges,
     },
+    #[error("no convergence in {iterations} iterations (last relative residual {relative_residual:e}). {regimes}")]
+    IterationLimit {
+        iterations: usize,
+        relative_residual: f64,
+        regimes: RegimeChanges,
+    },
+}
+
+/// Why a converged attempt was not kept: a check of the stepping policy
+/// refused its state (`docs/architecture.md`, "The stepping policy").
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum Refusal {
     /// A process-zone step converged with λ moved further than
     /// `loading.max_step`: the zone's jumps hardly respond to λ there, so
     /// the start state's own imbalance (IMPL-EX's error of the last step)
@@ -174,30 +179,56 @@ pub enum StepFailure {
         limit: f64,
         regimes: RegimeChanges,
     },
-    #[error("no convergence in {iterations} iterations (last relative residual {relative_residual:e}). {regimes}")]
-    IterationLimit {
-        iterations: usize,
-        relative_residual: f64,
-        regimes: RegimeChanges,
-    },
 }
 
-/// The regime changes a failure records, by reference or by mutable
-/// reference alike.
-macro_rules! recorded_regimes {
-    ($failure:expr) => {
-        match $failure {
-            StepFailure::Stagnating { regimes, .. }
-            | StepFailure::Diverging { regimes, .. }
-            | StepFailure::LinearSolve { regimes, .. }
-            | StepFailure::Unsettled { regimes, .. }
-            | StepFailure::CreatesEnergy { regimes, .. }
-            | StepFailure::OutOfBalance { regimes, .. }
-            | StepFailure::FailsEnergyCheck { regimes, .. }
-            | StepFailure::IterationLimit { regimes, .. } => Some(regimes),
+/// Why a step's attempt was not committed: it did not converge, or it
+/// converged and a check refused it.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum StepFailure {
+    #[error(transparent)]
+    NotConverged(#[from] NotConverged),
+    #[error(transparent)]
+    Refused(#[from] Refusal),
+}
+
+impl NotConverged {
+    /// The regime changes of the last iterate, where the failure records
+    /// them.
+    pub fn regimes(&self) -> Option<&RegimeChanges> {
+        match self {
+            NotConverged::Stagnating { regimes, .. }
+            | NotConverged::Diverging { regimes, .. }
+            | NotConverged::LinearSolve { regimes, .. }
+            | NotConverged::Unsettled { regimes, .. }
+            | NotConverged::IterationLimit { regimes, .. } => Some(regimes),
             _ => None,
         }
-    };
+    }
+
+    /// [`NotConverged::regimes`], to be recounted.
+    pub(crate) fn regimes_mut(&mut self) -> Option<&mut RegimeChanges> {
+        match self {
+            NotConverged::Stagnating { regimes, .. }
+            | NotConverged::Diverging { regimes, .. }
+            | NotConverged::LinearSolve { regimes, .. }
+            | NotConverged::Unsettled { regimes, .. }
+            | NotConverged::IterationLimit { regimes, .. } => Some(regimes),
+            _ => None,
+        }
+    }
+}
+
+impl Refusal {
+    /// The regime changes from the committed state to the refused one,
+    /// where the check records them.
+    pub fn regimes(&self) -> Option<&RegimeChanges> {
+        match self {
+            Refusal::CreatesEnergy { regimes, .. }
+            | Refusal::OutOfBalance { regimes, .. }
+            | Refusal::FailsEnergyCheck { regimes, .. } => Some(regimes),
+            _ => None,
+        }
+    }
 }
 
 /// A share of a step's external work as the energy rules report it; a
@@ -225,14 +256,12 @@ impl std::fmt::Display for ShareOfStepWork {
 }
 
 impl StepFailure {
-    /// The regime changes of the last iterate, where the failure records them.
+    /// The regime changes the failure records, if it does.
     pub fn regimes(&self) -> Option<&RegimeChanges> {
-        recorded_regimes!(self)
-    }
-
-    /// [`StepFailure::regimes`], to be recounted.
-    pub(crate) fn regimes_mut(&mut self) -> Option<&mut RegimeChanges> {
-        recorded_regimes!(self)
+        match self {
+            StepFailure::NotConverged(n) => n.regimes(),
+            StepFailure::Refused(r) => r.regimes(),
+        }
     }
 }
 
@@ -245,13 +274,13 @@ mod tests {
     /// share of it is not a number to print.
     #[test]
     fn energy_reasons_name_a_step_without_work() {
-        let creates = |of_step_work| StepFailure::CreatesEnergy {
+        let creates = |of_step_work| Refusal::CreatesEnergy {
             of_step_work,
             of_total_work: 0.5,
             limit: 0.15,
             regimes: RegimeChanges::default(),
         };
-        let unbalanced = |of_step_work| StepFailure::OutOfBalance {
+        let unbalanced = |of_step_work| Refusal::OutOfBalance {
             of_step_work,
             of_total_work: 0.01,
             limit: 0.15,

@@ -11,13 +11,14 @@
 //! tiny imposed increment, and the leftover imbalance of the previous step
 //! (converged to tol_r, not to zero) then looks like a large energy.
 
-use super::control::{Border, Control, Indirect};
-use super::failure::{RegimeChanges, StepFailure};
+use super::control::Control;
+use super::correction::{forcing_term, Request};
+use super::failure::{NotConverged, RegimeChanges};
 use super::workspace::Workspace;
 use crate::assembly::{LoadDerivatives, States, Tangents};
 use crate::laws::{InterfaceState, TangentKind};
 use crate::linalg::{dot, norm};
-use crate::spec::solver::{Forcing, SolverSettings};
+use crate::spec::solver::SolverSettings;
 
 /// Shortest line-search step kept; below it the full Newton step is taken.
 const LINE_SEARCH_MIN_STEP: f64 = 0.25;
@@ -27,7 +28,7 @@ pub(crate) struct Attempt {
     pub(crate) iterations: usize,
     /// Relative residual of each iterate (the predictor first).
     pub(crate) history: Vec<f64>,
-    pub(crate) failure: Option<StepFailure>,
+    pub(crate) failure: Option<NotConverged>,
     /// Converged on the force criterion only (see `Summary::force_only_steps`).
     pub(crate) force_only: bool,
     /// Of a failed attempt, or one that ended on its best iterate: the
@@ -53,7 +54,7 @@ impl Attempt {
             flipping_pairs: Vec::new(),
         }
     }
-    fn failed(iterations: usize, history: Vec<f64>, why: StepFailure) -> Self {
+    fn failed(iterations: usize, history: Vec<f64>, why: NotConverged) -> Self {
         Self {
             iterations,
             history,
@@ -67,11 +68,20 @@ impl Attempt {
 
 fn constitutive(
     in_line_search: bool,
-) -> impl FnOnce(crate::assembly::AssemblyError) -> StepFailure {
-    move |source| StepFailure::Constitutive {
+) -> impl FnOnce(crate::assembly::AssemblyError) -> NotConverged {
+    move |source| NotConverged::Constitutive {
         in_line_search,
         source,
     }
+}
+
+/// What a line search searches along: the full correction, g0 = d·r
+/// before it, and the residual norm the correction started from.
+#[derive(Clone, Copy)]
+struct Search<'a> {
+    direction: &'a [f64],
+    g0: f64,
+    r_prev: f64,
 }
 
 /// The running record of one Newton attempt.
@@ -156,10 +166,10 @@ impl Record {
             pair_flips: Vec::new(),
         }
     }
-    fn failed(mut self, iterations: usize, why: StepFailure) -> Attempt {
+    fn failed(mut self, iterations: usize, why: NotConverged) -> Attempt {
         self.failed_ref(iterations, why)
     }
-    fn failed_ref(&mut self, iterations: usize, why: StepFailure) -> Attempt {
+    fn failed_ref(&mut self, iterations: usize, why: NotConverged) -> Attempt {
         let mut attempt = Attempt::failed(iterations, std::mem::take(&mut self.history), why);
         attempt.flipping = self.flipping();
         attempt.flipping_pairs = self.flipping_pairs();
@@ -240,7 +250,7 @@ impl Workspace<'_> {
                 attempt.failure = Some(constitutive(false)(e));
             }
         }
-        if let Some(regimes) = attempt.failure.as_mut().and_then(StepFailure::regimes_mut) {
+        if let Some(regimes) = attempt.failure.as_mut().and_then(NotConverged::regimes_mut) {
             *regimes = RegimeChanges::between(start, &self.trial);
         }
         attempt
@@ -270,22 +280,19 @@ impl Workspace<'_> {
             rec.track(start, &self.trial);
             self.residual(&mut r);
             if let (true, Some((d, g0))) = (settings.line_search, prev.as_ref()) {
-                let line = (d.as_slice(), *g0);
-                match self.line_search(
-                    start,
-                    (u, &mut *control),
-                    rec.kinds,
-                    line,
-                    rec.r_prev,
-                    &mut r,
-                ) {
+                let line = Search {
+                    direction: d.as_slice(),
+                    g0: *g0,
+                    r_prev: rec.r_prev,
+                };
+                match self.line_search(start, u, &mut *control, rec.kinds, line, &mut r) {
                     Ok(s) => rec.last_energy *= s,
                     Err(e) => return rec.failed(k, e),
                 }
             }
             let rnorm = norm(&r);
             if !rnorm.is_finite() {
-                return rec.failed(k, StepFailure::NonFiniteResidual);
+                return rec.failed(k, NotConverged::NonFiniteResidual);
             }
             let scale = self.force_scale();
             rec.history.push(rnorm / scale);
@@ -320,12 +327,12 @@ impl Workspace<'_> {
             if k == settings.max_iterations {
                 break;
             }
-            if let Some(end) = self.stagnation(k, &mut rec, rnorm / scale, (start, u, control)) {
+            if let Some(end) = self.stagnation(k, &mut rec, rnorm / scale, start, u, control) {
                 return end;
             }
             if rnorm > 1e8 * rec.first_norm.max(scale) {
                 let regimes = RegimeChanges::between(start, &self.trial);
-                let why = StepFailure::Diverging {
+                let why = NotConverged::Diverging {
                     residual: rnorm,
                     regimes,
                 };
@@ -334,7 +341,7 @@ impl Workspace<'_> {
             let eta = forcing_term(settings, k, rnorm, rec.r_prev, rec.eta_prev, scale);
             rec.eta_prev = eta;
             rec.r_prev = rnorm;
-            let g0 = match self.newton_correction(start, (u, &mut *control), &r, &mut du, eta) {
+            let g0 = match self.newton_correction(start, u, &mut *control, &r, &mut du, eta) {
                 Ok(g0) => g0,
                 Err(why) => return rec.failed(k, why),
             };
@@ -347,7 +354,7 @@ impl Workspace<'_> {
             control.advance(1.0, u);
             prev = Some((du.clone(), g0));
         }
-        let why = StepFailure::IterationLimit {
+        let why = NotConverged::IterationLimit {
             iterations: settings.max_iterations,
             relative_residual: rec.history.last().copied().unwrap_or(f64::NAN),
             regimes: RegimeChanges::between(start, &self.trial),
@@ -370,7 +377,9 @@ impl Workspace<'_> {
         k: usize,
         rec: &mut Record,
         relative: f64,
-        (start, u, control): (&States, &mut [f64], &mut Control<'_>),
+        start: &States,
+        u: &mut [f64],
+        control: &mut Control<'_>,
     ) -> Option<Attempt> {
         let settings = self.settings;
         if k < rec.window + 8 {
@@ -404,7 +413,7 @@ impl Workspace<'_> {
             rec.window = k;
             return None;
         }
-        let why = StepFailure::Stagnating {
+        let why = NotConverged::Stagnating {
             relative_residual: relative,
             regimes: RegimeChanges::between(start, &self.trial),
         };
@@ -444,7 +453,16 @@ impl Workspace<'_> {
         let mut du = vec![0.0; n_free];
         let eta = self.settings.krylov_tolerance;
         if self
-            .correction(start, u, (&rhs, &mut du), eta, None)
+            .correction(
+                start,
+                u,
+                Request {
+                    rhs: &rhs,
+                    eta,
+                    border: None,
+                },
+                &mut du,
+            )
             .is_err()
             || du.iter().any(|v| !v.is_finite())
         {
@@ -457,18 +475,27 @@ impl Workspace<'_> {
     fn newton_correction(
         &mut self,
         start: &States,
-        (u, control): (&[f64], &mut Control<'_>),
+        u: &[f64],
+        control: &mut Control<'_>,
         r: &[f64],
         du: &mut [f64],
         eta: f64,
-    ) -> Result<f64, StepFailure> {
+    ) -> Result<f64, NotConverged> {
         let n_free = r.len();
         let solved = match control {
-            Control::Displacement => self.correction(start, u, (r, du), eta, None),
+            Control::Displacement => self.correction(
+                start,
+                u,
+                Request {
+                    rhs: r,
+                    eta,
+                    border: None,
+                },
+                du,
+            ),
             Control::Indirect(c) => {
-                let mut rhs = vec![0.0; n_free + 1];
                 let mut both = vec![0.0; n_free + 1];
-                let solved = self.bordered_correction(start, u, c, (r, &mut rhs), &mut both, eta);
+                let solved = self.bordered_correction(start, u, c, r, &mut both, eta);
                 du.copy_from_slice(&both[..n_free]);
                 c.increment = both[n_free];
                 solved
@@ -476,11 +503,11 @@ impl Workspace<'_> {
         };
         if let Err(source) = solved {
             let regimes = RegimeChanges::between(start, &self.trial);
-            return Err(StepFailure::LinearSolve { source, regimes });
+            return Err(NotConverged::LinearSolve { source, regimes });
         }
         let g0 = dot(du, r);
         if !g0.is_finite() {
-            return Err(StepFailure::NonFiniteCorrection);
+            return Err(NotConverged::NonFiniteCorrection);
         }
         Ok(g0)
     }
@@ -497,12 +524,17 @@ impl Workspace<'_> {
     fn line_search(
         &mut self,
         start: &States,
-        (u, control): (&mut [f64], &mut Control<'_>),
+        u: &mut [f64],
+        control: &mut Control<'_>,
         kinds: Tangents,
-        (d, g0): (&[f64], f64),
-        r_prev: f64,
+        search: Search<'_>,
         r: &mut [f64],
-    ) -> Result<f64, StepFailure> {
+    ) -> Result<f64, NotConverged> {
+        let Search {
+            direction: d,
+            g0,
+            r_prev,
+        } = search;
         let dofs = self.system.dofs();
         let mut s = 1.0;
         let mut g = dot(d, r);
@@ -534,133 +566,5 @@ impl Workspace<'_> {
             self.residual(r);
         }
         Ok(s)
-    }
-}
-
-impl Workspace<'_> {
-    /// The correction of the bordered system (see `control`): right-hand
-    /// side (r, −s g) with the constraint row scaled by s = ‖k_λ‖/‖(gᵤ, g_λ)‖,
-    /// so that GMRES weighs both alike; `du` receives (Δu, Δλ).
-    fn bordered_correction(
-        &mut self,
-        start: &States,
-        u: &[f64],
-        c: &Indirect<'_>,
-        (r, rhs): (&[f64], &mut [f64]),
-        du: &mut [f64],
-        eta: f64,
-    ) -> Result<(), crate::linalg::LinearError> {
-        let load = self.load.take().unwrap_or_default();
-        let n = r.len();
-        let mut row = std::mem::take(&mut self.constraint_row);
-        row.resize(n, 0.0);
-        let row_lambda = c.constraint.gradient(&load, &mut row);
-        let g_norm = (dot(&row, &row) + row_lambda * row_lambda).sqrt();
-        let scale = match norm(&load.column) / g_norm {
-            s if s.is_finite() && s > 0.0 => s,
-            _ => 1.0,
-        };
-        rhs[..n].copy_from_slice(r);
-        rhs[n] = -scale * c.constraint.residual(u, c.lambda, &self.f_int);
-        let border = Border {
-            column: &load.column,
-            row: &row,
-            row_lambda,
-            scale,
-        };
-        let out = self.correction(start, u, (rhs, du), eta, Some(&border));
-        self.load = Some(load);
-        self.constraint_row = row;
-        out
-    }
-}
-
-/// GMRES relative tolerance of correction `k` (see [`Forcing`]); `rnorm`
-/// is the current residual norm, `r_prev` the one the previous correction
-/// started from (N), `scale` the force scale of the residual criterion.
-pub(crate) fn forcing_term(
-    settings: &SolverSettings,
-    k: usize,
-    rnorm: f64,
-    r_prev: f64,
-    eta_prev: f64,
-    scale: f64,
-) -> f64 {
-    const ETA_MAX: f64 = 0.1;
-    let floor = settings.krylov_tolerance;
-    match settings.forcing {
-        Forcing::Fixed => floor,
-        Forcing::EisenstatWalker => {
-            let eta = if k == 0 || r_prev <= 0.0 {
-                ETA_MAX
-            } else {
-                let ratio = rnorm / r_prev;
-                let mut e = 0.9 * ratio * ratio;
-                // Safeguard against a sudden drop after a lucky iterate.
-                let carried = 0.9 * eta_prev * eta_prev;
-                if carried > 0.1 {
-                    e = e.max(carried);
-                }
-                e
-            };
-            eta.min(ETA_MAX).max(floor)
-        }
-        Forcing::Tolerance => {
-            let aim = 0.5 * settings.residual_tolerance * scale / rnorm;
-            if aim.is_finite() {
-                aim.min(ETA_MAX).max(floor)
-            } else {
-                floor
-            }
-        }
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// The Eisenstat–Walker forcing term (choice 2) stays within
-    /// [`krylov_tolerance`, 0.1], starts a step at 0.1, follows
-    /// 0.9 (‖r_k‖/‖r_{k−1}‖)² in between, and `fixed` forcing is constant
-    /// (SPEC §6: inexact Newton corrections; Eisenstat & Walker 1996).
-    #[test]
-    fn forcing_term_follows_eisenstat_walker_within_bounds() {
-        let ew = SolverSettings::default();
-        assert_eq!(ew.forcing, Forcing::EisenstatWalker);
-        let f = |k, r, rp, ep| forcing_term(&ew, k, r, rp, ep, 1.0);
-        assert_eq!(f(0, 1.0, 0.0, 0.0), 0.1);
-        // Ratio 0.2: 0.9·0.04 = 0.036.
-        assert!((f(1, 0.2, 1.0, 0.1) - 0.036).abs() < 1e-15);
-        // A slow decrease is capped at 0.1, a fast one floored at 1e-3.
-        assert_eq!(f(2, 0.9, 1.0, 0.1), 0.1);
-        assert_eq!(f(3, 1e-3, 1.0, 0.01), ew.krylov_tolerance);
-        // Safeguard: a previous η of 0.4 keeps η ≥ 0.9·0.16 = 0.144 → cap.
-        assert_eq!(f(4, 1e-2, 1.0, 0.4), 0.1);
-        let fixed = SolverSettings {
-            forcing: Forcing::Fixed,
-            ..ew
-        };
-        assert_eq!(forcing_term(&fixed, 3, 0.5, 1.0, 0.1, 1.0), 1e-3);
-    }
-
-    /// `tolerance` forcing aims each correction at half the force
-    /// criterion (tol_r · scale / ‖r‖ / 2) within [`krylov_tolerance`, 0.1],
-    /// whatever the previous corrections did.
-    #[test]
-    fn forcing_term_aims_at_the_force_criterion() {
-        let aim = SolverSettings {
-            forcing: Forcing::Tolerance,
-            residual_tolerance: 1e-4,
-            ..SolverSettings::default()
-        };
-        let f = |k, r, scale| forcing_term(&aim, k, r, 1.0, 0.1, scale);
-        // ‖r‖ = 7e-3 of a 2 kN reaction: 0.5e-4 / 7e-3.
-        assert!((f(0, 14.0, 2e3) - 0.5e-4 / 7e-3).abs() < 1e-15);
-        assert_eq!(f(1, 14.0, 2e3), f(0, 14.0, 2e3));
-        // Near the criterion at most 0.1, far from it at least 1e-3.
-        assert_eq!(f(1, 1.2e-4, 1.0), 0.1);
-        assert_eq!(f(0, 1.0, 1.0), aim.krylov_tolerance);
-        assert_eq!(f(0, 0.0, 1.0), aim.krylov_tolerance);
     }
 }

@@ -105,6 +105,13 @@ pub struct Summary {
     /// checkpoint's encoding is not self-describing.)
     #[serde(default)]
     pub interface_holds_from_step: Option<usize>,
+    /// The checks of the stepping policy that were off in this run, from
+    /// which step and why (the energy check where points are integrated
+    /// explicitly for the whole run, or its record is not available).
+    /// Always serialised: the checkpoint's encoding is not
+    /// self-describing.
+    #[serde(default)]
+    pub checks_off: Vec<CheckOff>,
     /// The preconditioner GMRES used (`solver.expert.preconditioner` resolved;
     /// `cholesky` for the direct and PCG linear solvers).
     #[serde(default)]
@@ -114,6 +121,16 @@ pub struct Summary {
     #[serde(default)]
     pub peak_rss_mib: f64,
     pub wall_time_s: WallTimes,
+}
+
+/// A check of the stepping policy that was off in a run.
+#[derive(Debug, Clone, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub struct CheckOff {
+    /// The check's name (`energy`).
+    pub check: String,
+    /// The first step it did not apply to.
+    pub from_step: usize,
+    pub why: String,
 }
 
 /// How a run that returned a result ended.

@@ -122,6 +122,8 @@ impl Default for Loading {
     }
 }
 
+
+
 /// Linear solver of the Newton corrections.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default)]
 #[serde(rename_all = "snake_case")]
@@ -497,6 +499,7 @@ impl SolverSettings {
         }
     }
 }
+
 
 fn is_zero(v: &f64) -> bool {
     *v == 0.0
