@@ -482,13 +482,19 @@ pub fn solver_variants() -> Vec<(&'static str, Vec<&'static str>)> {
         ("energy 1e-6", vec!["solver.expert.energy_tolerance=1e-6"]),
         (
             "krylov 1e-6, fixed forcing",
-            vec!["solver.expert.krylov_tolerance=1e-6", "solver.expert.forcing=fixed"],
+            vec![
+                "solver.expert.krylov_tolerance=1e-6",
+                "solver.expert.forcing=fixed",
+            ],
         ),
         ("initial step 10 µm", vec!["loading.initial_step=\"10 um\""]),
         ("max step 40 µm", vec!["loading.max_step=\"40 um\""]),
         ("growth 1.2", vec!["solver.expert.growth=1.2"]),
         ("growth 2", vec!["solver.expert.growth=2"]),
-        ("constant predictor", vec!["solver.expert.predictor=constant"]),
+        (
+            "constant predictor",
+            vec!["solver.expert.predictor=constant"],
+        ),
         ("tangent secant", vec!["solver.expert.tangent=secant"]),
         ("no line search", vec!["solver.expert.line_search=false"]),
         (

@@ -285,8 +285,14 @@ fn bad_input_is_reported_and_keeps_artifacts() {
             "materials.interface.mu",
         ),
         (&["--set", "mesh.h_outer=0.1 mm"], "mesh.h_outer"),
-        (&["--set", "solver.expert.cutback=2"], "solver.expert.cutback"),
-        (&["--set", "solver.expert.max_steps=0"], "solver.expert.max_steps"),
+        (
+            &["--set", "solver.expert.cutback=2"],
+            "solver.expert.cutback",
+        ),
+        (
+            &["--set", "solver.expert.max_steps=0"],
+            "solver.expert.max_steps",
+        ),
         (
             &["--set", "loading.cutback=0.4"],
             "loading.cutback: moved to solver.expert.cutback",
@@ -345,7 +351,14 @@ fn bad_input_is_reported_and_keeps_artifacts() {
 fn step_limit_keeps_the_converged_steps() {
     let work = work_dir("steplimit");
     let w = work.to_str().unwrap();
-    let args = ["run", TINY, "--work", w, "--set", "solver.expert.max_steps=3"];
+    let args = [
+        "run",
+        TINY,
+        "--work",
+        w,
+        "--set",
+        "solver.expert.max_steps=3",
+    ];
     let mut verbose = args.to_vec();
     verbose.push("-v");
     let o = ribbar(&verbose);

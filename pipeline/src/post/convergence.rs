@@ -16,8 +16,8 @@
 //! here the equation is solved as written above and a series without a
 //! positive solution is reported as divergent instead.
 
+use super::error::PostError;
 use super::uncertainty::{least_squares_uncertainty, LeastSquaresEstimate};
-use super::PostError;
 
 /// Safety factor of the GCI for studies with three or more grids (Roache;
 /// Celik et al. 2008, Eq. 8).

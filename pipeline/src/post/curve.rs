@@ -1,6 +1,6 @@
 //! Reading the solver's `curve.csv` (its format: `solve::curve`).
 
-use super::PostError;
+use super::error::PostError;
 use solve::curve::CurveCsvError;
 pub use solve::curve::{CurveRow, CURVE_COLUMNS};
 use std::path::Path;

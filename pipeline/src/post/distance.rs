@@ -1,7 +1,8 @@
 //! Distance between two σ_mb curves: how far a run is from a reference run
 //! (a finer mesh, a tighter tolerance) as one number.
 
-use super::{CurveRow, PostError};
+use super::curve::CurveRow;
+use super::error::PostError;
 
 /// The abscissa two curves are compared along.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -1,6 +1,6 @@
 //! Writing result files so that a reader never sees a half-written one.
 
-use super::PostError;
+use super::error::PostError;
 use std::path::{Path, PathBuf};
 
 /// A temporary sibling of `path` that keeps its extension (the PNG encoder

@@ -25,6 +25,7 @@
 //! assert!((s.energy.unwrap() - 1.0e4).abs() < 1e-6);
 //! ```
 
+mod cell;
 mod convergence;
 mod curve;
 mod distance;

@@ -6,8 +6,9 @@
 //! Debian's `fonts-dejavu-core`, or another `.ttf` under the system font
 //! directories), so plotting needs no font-configuration libraries.
 
+use super::curve::CurveRow;
+use super::error::PostError;
 use super::fsutil::{commit, create_parent, temp_sibling, write_atomic};
-use super::{CurveRow, PostError};
 use plotters::coord::Shift;
 /// Pixel coordinates of the drawing backend.
 type BackendCoord = (i32, i32);
@@ -81,7 +82,7 @@ pub struct ErrorTimeSeries {
 impl ErrorTimeSeries {
     /// Relative error against the Richardson extrapolation versus wall time,
     /// for the grids of a convergence study that have a wall time.
-    pub fn from_study(study: &super::ConvergenceStudy) -> Self {
+    pub fn from_study(study: &super::convergence::ConvergenceStudy) -> Self {
         ErrorTimeSeries {
             label: study.quantity.clone(),
             points: study
@@ -95,7 +96,7 @@ impl ErrorTimeSeries {
     /// The least-squares uncertainty U/|φ| (four grids or more) versus
     /// wall time: an error bar also for series whose triplets give no
     /// extrapolation.
-    pub fn uncertainty_from_study(study: &super::ConvergenceStudy) -> Self {
+    pub fn uncertainty_from_study(study: &super::convergence::ConvergenceStudy) -> Self {
         ErrorTimeSeries {
             label: format!("U: {}", study.quantity),
             points: study

@@ -6,7 +6,9 @@
 //! (trapezoidal rule), and follow the path in step order, so a step where
 //! the free end moves back contributes with its sign.
 
-use super::{Cell, CurveRow, PostError};
+use super::cell::Cell;
+use super::curve::CurveRow;
+use super::error::PostError;
 use serde::{Deserialize, Serialize};
 
 /// How the curve summary is computed.

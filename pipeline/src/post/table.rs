@@ -1,70 +1,12 @@
 //! Study and convergence tables, written as CSV (full precision, for
 //! machines) and Markdown (four significant digits, for people).
 
+use super::convergence::ConvergenceStudy;
+use super::error::PostError;
 use super::fsutil::write_atomic;
-use super::{ConvergenceStudy, PostError};
 use std::path::Path;
 
-/// One table cell.
-#[derive(Debug, Clone, PartialEq)]
-pub enum Cell {
-    Int(i64),
-    Num(f64),
-    Text(String),
-    /// A value this row does not have.
-    Empty,
-}
-
-impl From<f64> for Cell {
-    fn from(x: f64) -> Self {
-        Cell::Num(x)
-    }
-}
-impl From<i64> for Cell {
-    fn from(x: i64) -> Self {
-        Cell::Int(x)
-    }
-}
-impl From<u64> for Cell {
-    fn from(x: u64) -> Self {
-        i64::try_from(x).map_or(Cell::Num(x as f64), Cell::Int)
-    }
-}
-impl From<usize> for Cell {
-    fn from(x: usize) -> Self {
-        Cell::from(x as u64)
-    }
-}
-impl From<&str> for Cell {
-    fn from(x: &str) -> Self {
-        Cell::Text(x.to_string())
-    }
-}
-impl From<String> for Cell {
-    fn from(x: String) -> Self {
-        Cell::Text(x)
-    }
-}
-impl<T: Into<Cell>> From<Option<T>> for Cell {
-    fn from(x: Option<T>) -> Self {
-        x.map_or(Cell::Empty, Into::into)
-    }
-}
-impl From<&serde_json::Value> for Cell {
-    /// Numbers stay numbers, strings text, null empty; anything else is
-    /// shown as compact JSON text.
-    fn from(v: &serde_json::Value) -> Self {
-        match v {
-            serde_json::Value::Null => Cell::Empty,
-            serde_json::Value::Number(n) => match n.as_i64() {
-                Some(i) => Cell::Int(i),
-                None => Cell::Num(n.as_f64().unwrap_or(f64::NAN)),
-            },
-            serde_json::Value::String(s) => Cell::Text(s.clone()),
-            other => Cell::Text(other.to_string()),
-        }
-    }
-}
+pub use super::cell::Cell;
 
 impl From<&serde_yaml::Value> for Cell {
     /// A parameter value as written in a study file: numbers stay numbers,
@@ -279,14 +221,14 @@ pub struct StudyCase {
     /// The study's varied parameters for this case, as (spec key, value).
     pub params: Vec<(String, Cell)>,
     /// Summary quantities, as (name with unit, value), e.g. from
-    /// [`CurveSummary::table_entries`](super::CurveSummary::table_entries).
+    /// [`CurveSummary::table_entries`](super::summary::CurveSummary::table_entries).
     pub summary: Vec<(String, Cell)>,
 }
 
 impl StudyCase {
     /// A case from its swept parameters (spec key, value as written in the
     /// study file) and its `summary.json`. Summary columns: the entries of
-    /// [`CurveSummary::table_entries`](super::CurveSummary::table_entries)
+    /// [`CurveSummary::table_entries`](super::summary::CurveSummary::table_entries)
     /// from the `curve` object, then `dofs` and `solve_wall_time_s` when the
     /// summary has `solver.summary.dofs` and `solver.summary.wall_time_s.total`.
     /// A summary without a readable `curve` object gives only what is found.
@@ -297,7 +239,7 @@ impl StudyCase {
     ) -> StudyCase {
         let mut entries = summary
             .get("curve")
-            .and_then(|c| serde_json::from_value::<super::CurveSummary>(c.clone()).ok())
+            .and_then(|c| serde_json::from_value::<super::summary::CurveSummary>(c.clone()).ok())
             .map(|c| c.table_entries())
             .unwrap_or_default();
         for (name, pointer) in [

@@ -18,7 +18,7 @@
 //!
 //! Reference: Abbas, Bary, Jason (2023), Appendix B.
 
-use super::{
+use super::contract::{
     check_finite, check_result, InterfaceLaw, InterfaceResponse, InterfaceState, LawError,
     TangentKind,
 };

@@ -2,7 +2,7 @@
 //! t = diag(K_n, K_s, K_s) u. Used for perfect-bond and linear reference
 //! runs, and as the undamaged part of the other laws.
 
-use super::{
+use super::contract::{
     BulkLaw, BulkResponse, BulkState, InterfaceLaw, InterfaceResponse, InterfaceState, LawError,
     TangentKind,
 };

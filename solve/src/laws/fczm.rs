@@ -38,12 +38,12 @@
 //! Reference: Abbas, Bary, Jason, IJMS 237 (2023) §3.1; G. Alfano, E. Sacco,
 //! IJNME 68 (2006) for the damage/friction decomposition.
 
-use super::coulomb::slip_return;
-use super::tvergaard::opening;
-use super::{
+use super::contract::{
     check_finite, check_result, extrapolated_lambda, lambda_step, InterfaceLaw, InterfaceResponse,
     InterfaceState, LambdaStep, LawError, TangentKind,
 };
+use super::coulomb::slip_return;
+use super::tvergaard::opening;
 use nalgebra::{Matrix3, Vector2, Vector3};
 use serde::{Deserialize, Serialize};
 

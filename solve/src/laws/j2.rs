@@ -15,8 +15,10 @@
 //! Reference: J.C. Simo, T.J.R. Hughes, *Computational Inelasticity*,
 //! Springer 1998, §3.3 (radial return), with zero hardening.
 
+use super::contract::{
+    check_finite, check_result, BulkLaw, BulkResponse, BulkState, LawError, TangentKind,
+};
 use super::elastic::isotropic_stiffness;
-use super::{check_finite, check_result, BulkLaw, BulkResponse, BulkState, LawError, TangentKind};
 use nalgebra::{Matrix6, Vector6};
 use serde::{Deserialize, Serialize};
 

@@ -31,8 +31,10 @@
 //! concrete structures", Eng. Fract. Mech. 25 (1986); Abbas, Bary, Jason,
 //! IJMS 237 (2023), §2.3.
 
+use super::contract::{
+    check_finite, check_result, BulkLaw, BulkResponse, BulkState, LawError, TangentKind,
+};
 use super::elastic::isotropic_stiffness;
-use super::{check_finite, check_result, BulkLaw, BulkResponse, BulkState, LawError, TangentKind};
 use nalgebra::{Matrix3, Matrix6, SymmetricEigen, Vector3, Vector6};
 use serde::{Deserialize, Serialize};
 

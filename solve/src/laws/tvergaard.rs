@@ -19,7 +19,7 @@
 //! Reference: V. Tvergaard, "Effect of fibre debonding in a whisker-reinforced
 //! metal", Mater. Sci. Eng. A 125 (1990); Abbas, Bary, Jason (2023) App. A.
 
-use super::{
+use super::contract::{
     check_finite, check_result, extrapolated_lambda, lambda_step, InterfaceLaw, InterfaceResponse,
     InterfaceState, LawError, TangentKind,
 };

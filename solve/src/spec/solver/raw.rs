@@ -12,7 +12,7 @@
 //! Keys of an earlier layout are refused with their new place
 //! ([`moved_key`]), so an old scene file says what to change.
 
-use super::{
+use super::settings::{
     ConcreteIntegration, CurveError, Forcing, InterfaceHolds, InterfaceIntegration,
     LinearSolverKind, Loading, MultigridRebuild, PathFollowing, Precision, PreconditionerKind,
     Predictor, SolverSettings, SolverSpecError, DEFAULT_IMPL_EX_REJECT,
@@ -214,8 +214,14 @@ const MOVED: &[(&str, Option<&str>)] = &[
     ("loading.max_steps", Some("solver.expert.max_steps")),
     ("loading.curve_error", Some("solver.expert.curve_error")),
     ("loading.easy_iterations", None),
-    ("solver.energy_tolerance", Some("solver.expert.energy_tolerance")),
-    ("solver.max_iterations", Some("solver.expert.max_iterations")),
+    (
+        "solver.energy_tolerance",
+        Some("solver.expert.energy_tolerance"),
+    ),
+    (
+        "solver.max_iterations",
+        Some("solver.expert.max_iterations"),
+    ),
     ("solver.tangent", Some("solver.expert.tangent")),
     ("solver.line_search", Some("solver.expert.line_search")),
     ("solver.predictor", Some("solver.expert.predictor")),
@@ -225,21 +231,39 @@ const MOVED: &[(&str, Option<&str>)] = &[
     ),
     ("solver.linear_solver", Some("solver.expert.linear_solver")),
     ("solver.ordering", Some("solver.expert.ordering")),
-    ("solver.krylov_tolerance", Some("solver.expert.krylov_tolerance")),
+    (
+        "solver.krylov_tolerance",
+        Some("solver.expert.krylov_tolerance"),
+    ),
     (
         "solver.krylov_max_iterations",
         Some("solver.expert.krylov_max_iterations"),
     ),
     ("solver.forcing", Some("solver.expert.forcing")),
-    ("solver.preconditioner", Some("solver.expert.preconditioner")),
+    (
+        "solver.preconditioner",
+        Some("solver.expert.preconditioner"),
+    ),
     (
         "solver.preconditioner_precision",
         Some("solver.expert.preconditioner_precision"),
     ),
-    ("solver.multigrid_rebuild", Some("solver.expert.multigrid_rebuild")),
-    ("solver.impl_ex_reject", Some("solver.expert.impl_ex_reject")),
-    ("solver.sliver_quality", Some("solver.expert.sliver_quality")),
-    ("solver.interface_holds", Some("solver.expert.interface_holds")),
+    (
+        "solver.multigrid_rebuild",
+        Some("solver.expert.multigrid_rebuild"),
+    ),
+    (
+        "solver.impl_ex_reject",
+        Some("solver.expert.impl_ex_reject"),
+    ),
+    (
+        "solver.sliver_quality",
+        Some("solver.expert.sliver_quality"),
+    ),
+    (
+        "solver.interface_holds",
+        Some("solver.expert.interface_holds"),
+    ),
     (
         "solver.dissipation_tolerance",
         Some("solver.expert.dissipation_tolerance"),
@@ -424,9 +448,7 @@ impl RawSolver {
             stagnation_acceptance: stagnation_acceptance(
                 x.stagnation_acceptance.unwrap_or(p.stagnation_acceptance),
             )?,
-            concrete_integration: self
-                .concrete_integration
-                .unwrap_or(p.concrete_integration),
+            concrete_integration: self.concrete_integration.unwrap_or(p.concrete_integration),
             interface_integration,
             impl_ex_tolerance: impl_ex_tolerance(
                 self.impl_ex_tolerance.unwrap_or(p.impl_ex_tolerance),
@@ -562,8 +584,8 @@ mod tests {
                 .to_string();
             assert!(e.contains("solver.expert.stagnation_acceptance"), "{e}");
         }
-        let s = solver("expert: {stagnation_acceptance: 1, preconditioner_precision: double}")
-            .unwrap();
+        let s =
+            solver("expert: {stagnation_acceptance: 1, preconditioner_precision: double}").unwrap();
         assert_eq!(
             (s.stagnation_acceptance, s.preconditioner_precision),
             (1.0, Precision::Double)
