@@ -5,27 +5,43 @@ use crate::outputs::{Outputs, RawOutputs};
 use crate::overrides::Override;
 use geom::spec::{Bar, RawBar, RawSpecimen, Specimen};
 use mesh::spec::{MeshSpec, RawMeshSpec};
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 use solve::spec::materials::{Materials, NonAdhesive, RawMaterials};
 use solve::spec::solver::{Loading, RawLoading, RawSolver, SolverSettings};
 use std::path::{Path, PathBuf};
 
-/// The spec as written (after overrides).
-#[derive(Debug, Clone, Deserialize)]
+/// The spec as written (after overrides). Every field's doc comment is its
+/// text in the scene reference and the JSON Schema (`ribbar schema scene`).
+#[derive(Debug, Clone, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct RawScene {
+    /// The scene's name: its results go to `WORK/<name>/` (text; required;
+    /// 1–100 letters, digits, `-`, `_` or `.`, not starting with `.`).
     pub name: String,
+    /// The bar: smooth or ribbed, its diameter and its ribs.
     pub bar: RawBar,
+    /// The pull-out specimen: the concrete cube, the bonded length, the
+    /// bar's overhangs and the modelled part.
     #[serde(default)]
+    #[schemars(with = "crate::schema::SpecimenSection")]
     pub specimen: RawSpecimen,
+    /// How gmsh meshes the specimen.
     #[serde(default)]
     pub mesh: RawMeshSpec,
+    /// The constitutive laws of the concrete, the steel and the interface.
     #[serde(default)]
     pub materials: RawMaterials,
+    /// The imposed displacement of the bar's loaded end and its steps.
     #[serde(default)]
+    #[schemars(schema_with = "crate::schema::loading_section")]
     pub loading: RawLoading,
+    /// The nonlinear solver: convergence criteria, linear solvers,
+    /// integration of the laws.
     #[serde(default)]
+    #[schemars(schema_with = "crate::schema::solver_section")]
     pub solver: RawSolver,
+    /// Which fields, plots and summary quantities are produced.
     #[serde(default)]
     pub outputs: RawOutputs,
     /// `specimen.non_adhesive`, taken out of the `specimen` section before

@@ -210,7 +210,7 @@ fn threshold_two_cycles_are_settled_by_an_explicit_retry() {
 /// a stall), and a resume from the state it went back to gives the same
 /// curve bit for bit. (The energy balance across the
 /// discarded steps: `energy_tracker_rewound_equals_resumed`, and the
-/// stress sweep's case 21 in docs/stress-sweep.md.)
+/// stress sweep's case 21 in docs/src/validation/stress/stress-sweep.md.)
 #[test]
 fn a_stall_goes_back_and_holds_the_interface_points_that_chatter() {
     use solve::nonlinear::{Checkpoint, CommittedView, Ending, Observer, Silent};
@@ -597,7 +597,7 @@ fn brittle_failure_curve(
     pipeline::post::parse_curve_csv(&curve, Path::new("curve.csv")).unwrap()
 }
 
-/// A case outside the stress sweep (case 9 of docs/stress-holdout.md: a
+/// A case outside the stress sweep (case 9 of docs/src/validation/stress/stress-holdout.md: a
 /// stiff, strong, brittle interface on a herringbone bar with 42° ribs):
 /// the cube splits. Dissipation control, with the interface points held
 /// (tried before a split is diagnosed), converges its smallest step with
@@ -606,7 +606,7 @@ fn brittle_failure_curve(
 /// that little energy. The run ends as a result, whose failure load is the
 /// largest force of the curve, at that step's λ. (The case that showed
 /// this first, holdout case 19, now takes another branch of its split,
-/// which snaps back; rounding picks the branch, docs/stress.md.
+/// which snaps back; rounding picks the branch, docs/src/validation/stress.md.
 /// Diagnosed before the held points were tried, a stall whose iterates
 /// wandered to λ < 0 was taken for a split on the stress sweep's case 21,
 /// which the held points carry to 0.3 mm:
@@ -664,7 +664,7 @@ fn a_split_whose_held_points_do_not_settle_ends_at_a_brittle_failure_at_the_peak
 /// that showed this first, smooth-holdout case 11, where the dissipated
 /// energy fell by 1.1 % of W_ext in one state, now takes another branch
 /// that never reaches such a state; rounding picks the branch,
-/// docs/stress.md.)
+/// docs/src/validation/stress.md.)
 #[test]
 fn a_state_that_creates_energy_is_refused() {
     let work = std::env::temp_dir().join(format!("ribbar-creates-energy-{}", std::process::id()));
@@ -781,7 +781,7 @@ fn multigrid_preconditioned_solve_follows_the_cholesky_curve() {
 }
 
 /// A smooth bar whose stiff, strong bond lets go at its peak (smooth
-/// holdout case 12, docs/smooth-holdout.md): dissipation control snaps the
+/// holdout case 12, docs/src/validation/stress/smooth-holdout.md): dissipation control snaps the
 /// path back towards the origin and the run ends at a brittle failure with
 /// no crack band through the cover. Its line says so instead of naming a
 /// split cube, and the split's words stay for a cover that is cracked
