@@ -61,7 +61,7 @@ def cut(source):
     return plane
 
 
-def damage_view(bulk):
+def damage_view(bulk, aspect):
     view = pv.CreateView("RenderView")
     view.OrientationAxesVisibility = 0
     view.Background = [1.0, 1.0, 1.0]
@@ -80,13 +80,33 @@ def damage_view(bulk):
     steel = pv.Show(cut(region(bulk, STEEL)), view)
     steel.ColorArrayName = ["POINTS", ""]
     steel.AmbientColor = steel.DiffuseColor = [0.6, 0.6, 0.65]
-    view.CameraPosition = [1.0, 0.0, 0.0]
-    view.CameraFocalPoint = [0.0, 0.0, 0.0]
+    # Seen from +x with y up, the bar axis z runs across the picture,
+    # framed on the cut's extent.
+    bulk.UpdatePipeline()
+    x0, x1, y0, y1, z0, z1 = bulk.GetDataInformation().GetBounds()
+    centre = [0.0, 0.5 * (y0 + y1), 0.5 * (z0 + z1)]
+    view.CameraFocalPoint = centre
+    view.CameraPosition = [centre[0] + 10 * (z1 - z0), centre[1], centre[2]]
     view.CameraViewUp = [0.0, 1.0, 0.0]
-    # Seen from +x with y up, the bar axis z runs across the picture.
     view.CameraParallelProjection = 1
-    view.ResetCamera()
+    view.CameraParallelScale = 0.55 * max(y1 - y0, (z1 - z0) / aspect)
     return view
+
+
+def curve_column(results, name):
+    """The values of one column of curve.csv."""
+    with open(os.path.join(results, "curve.csv")) as f:
+        header = f.readline().strip().split(",")
+        i = header.index(name)
+        return [float(line.split(",")[i]) for line in f if line.strip()]
+
+
+def max_stress(results):
+    return max(curve_column(results, "bond_stress")) * 1e-6
+
+
+def max_fed(results):
+    return max(curve_column(results, "fed")) * 1e3
 
 
 def curve_view(results):
@@ -101,6 +121,12 @@ def curve_view(results):
     view.LeftAxisTitle = "mean bond stress σ_mb (MPa)"
     view.BottomAxisTitle = "free-end slip FED (mm)"
     view.ShowLegend = 0
+    view.LeftAxisUseCustomRange = 1
+    view.LeftAxisRangeMinimum = 0.0
+    view.LeftAxisRangeMaximum = 1.1 * max(0.0, max_stress(results))
+    view.BottomAxisUseCustomRange = 1
+    view.BottomAxisRangeMinimum = 0.0
+    view.BottomAxisRangeMaximum = 1.05 * max_fed(results)
     shown = pv.Show(stress, view)
     shown.UseIndexForXAxis = 0
     shown.XArrayName = "FED (mm)"
@@ -115,14 +141,14 @@ def main():
     bulk = pv.XMLUnstructuredGridReader(FileName=[bulk_file(args.results, args.step)])
     out = args.out or os.path.join(args.results, "damage-%s.png" % args.step)
     layout = pv.CreateLayout("ribbar")
-    damage = damage_view(bulk)
+    size = args.size or ([1600, 500] if args.with_curve else [1000, 500])
+    share = 0.38 if args.with_curve else 0.0
+    damage = damage_view(bulk, (1 - share) * size[0] / size[1])
     if args.with_curve:
-        size = args.size or [1600, 500]
-        cell = layout.SplitHorizontal(0, 0.38)
+        cell = layout.SplitHorizontal(0, share)
         layout.AssignView(cell, curve_view(args.results))
         layout.AssignView(cell + 1, damage)
     else:
-        size = args.size or [1000, 500]
         layout.AssignView(0, damage)
     layout.SetSize(*size)
     pv.SaveScreenshot(out, layout, ImageResolution=size, TransparentBackground=0)

@@ -13,6 +13,9 @@ expected output, stdout and stderr together:
 - a command must exit 0, unless its expected output starts with `? N`, the
   exit status it must end with.
 
+A ```python block runs with `python3`, preceded by the page's earlier Python
+blocks, and must exit 0.
+
 A page that needs a program the test machine may lack names it in a
 comment `<!-- requires: pvpython -->`.
 """
@@ -37,20 +40,29 @@ class Command:
     text: str
     expected: list[str] = field(default_factory=list)
     status: int = 0
+    # A ```python block: run with python3, after the page's earlier blocks.
+    python: bool = False
 
 
 def commands(page: Path) -> list[Command]:
-    """The commands of the page's console blocks with their expected output."""
+    """The commands of the page's console blocks with their expected output,
+    and its Python blocks, in page order."""
     out: list[Command] = []
-    in_block = False
+    in_block = None
     pending: str | None = None
     for number, line in enumerate(page.read_text().splitlines(), 1):
         stripped = line.strip()
-        if not in_block:
-            in_block = stripped == "```console"
+        if in_block is None:
+            if stripped in ("```console", "```python"):
+                in_block = stripped[3:]
+                if in_block == "python":
+                    out.append(Command(number, "", python=True))
             continue
         if stripped.startswith("```"):
-            in_block = False
+            in_block = None
+            continue
+        if in_block == "python":
+            out[-1].text += line + "\n"
             continue
         if pending is not None:
             pending += "\n" + line
@@ -99,7 +111,9 @@ def mismatch(expected: list[str], output: list[str]) -> str | None:
 
 
 def scratch(page: Path, root: Path) -> Path:
-    """A working directory for `page` with the files its commands read."""
+    """A working directory for `page` with the files its commands read. The
+    pages share one `ribbar-work`, as a reader's do who follows them in
+    turn: a scene an earlier page ran is up to date on a later one."""
     work = root / page.relative_to(BOOK).with_suffix("").as_posix().replace("/", "-")
     shutil.rmtree(work, ignore_errors=True)
     work.mkdir(parents=True)
@@ -107,6 +121,8 @@ def scratch(page: Path, root: Path) -> Path:
         shutil.copytree(REPO / name, work / name, ignore=shutil.ignore_patterns("ribbar-work"))
     shutil.copytree(REPO / "tests" / "data", work / "tests" / "data")
     (work / "scripts").symlink_to(REPO / "scripts")
+    (root / "ribbar-work").mkdir(exist_ok=True)
+    (work / "ribbar-work").symlink_to(root / "ribbar-work")
     return work
 
 
@@ -114,9 +130,15 @@ def run_page(page: Path, root: Path, env: dict[str, str]) -> list[str]:
     """Runs every command of `page`; returns one message per failure."""
     work = scratch(page, root)
     failures = []
+    python = ""
     for command in commands(page):
+        if command.python:
+            python += command.text
+            argv = ["python3", "-c", python]
+        else:
+            argv = ["bash", "-c", "set -o pipefail\n" + command.text]
         done = subprocess.run(
-            ["bash", "-c", "set -o pipefail\n" + command.text],
+            argv,
             cwd=work,
             env=env,
             stdin=subprocess.DEVNULL,
