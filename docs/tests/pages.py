@@ -86,7 +86,12 @@ def requirements(page: Path) -> list[str]:
 
 
 def pages_with_commands() -> list[Path]:
-    return sorted(p for p in BOOK.rglob("*.md") if commands(p))
+    """The pages with commands, in the order of the book's table of
+    contents: a reader's order, which the shared work directory follows."""
+    listed = re.findall(r"\]\(([^)]+\.md)\)", (BOOK / "SUMMARY.md").read_text())
+    order = {BOOK / p: i for i, p in enumerate(listed)}
+    found = [p for p in BOOK.rglob("*.md") if commands(p)]
+    return sorted(found, key=lambda p: (order.get(p, len(order)), str(p)))
 
 
 def line_matches(pattern: str, line: str) -> bool:

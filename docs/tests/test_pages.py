@@ -25,12 +25,17 @@ def page_id(page: Path) -> str:
 SUITE = [p for p in pages.pages_with_commands() if bool(pages.requirements(p)) == LONG]
 
 
+@pytest.fixture(scope="session")
+def root(tmp_path_factory) -> Path:
+    """One scratch root for all pages: they share its ribbar-work."""
+    return tmp_path_factory.mktemp("pages")
+
+
 @pytest.mark.parametrize("page", SUITE, ids=page_id)
-def test_page_commands_run_as_written(page: Path, tmp_path_factory) -> None:
+def test_page_commands_run_as_written(page: Path, root: Path) -> None:
     """Every command of the page exits as the page says and prints what it shows."""
     missing = [n for n in pages.requirements(page) if shutil.which(n) is None]
     assert not missing, f"{page_id(page)} needs {missing} on PATH"
-    root = tmp_path_factory.mktemp("pages")
     failures = pages.run_page(page, root, pages.environment(Path(BIN) if BIN else None))
     assert not failures, "\n\n".join(failures)
 
