@@ -131,8 +131,8 @@ pub fn material(args: &MaterialArgs) -> Result<ExitCode> {
 /// Prints the JSON Schema of a scene or study file.
 pub fn schema(args: &SchemaArgs) -> Result<ExitCode> {
     let schema = match args.kind {
-        SchemaKind::Scene => crate::schema::scene(),
-        SchemaKind::Study => crate::schema::study(),
+        SchemaKind::Scene => crate::scene::RawScene::schema(),
+        SchemaKind::Study => crate::study::RawStudy::schema(),
     };
     let mut out = std::io::stdout().lock();
     writeln!(out, "{}", serde_json::to_string_pretty(&schema)?)?;

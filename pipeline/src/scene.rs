@@ -224,6 +224,14 @@ impl Scene {
 }
 
 impl RawScene {
+    /// The JSON Schema of a scene file (`ribbar schema scene`).
+    pub fn schema() -> serde_json::Value {
+        crate::schema::root::<RawScene>(
+            "ribbar scene",
+            "A ribbar scene: one pull-out specimen, its mesh, laws, loading, solver and outputs.",
+        )
+    }
+
     pub fn resolve(&self) -> Result<Scene, SectionError> {
         check_name(&self.name).map_err(SectionError::Name)?;
         let (bar, geometry) = geom::spec::resolve(&self.bar, &self.specimen)?;
@@ -286,6 +294,7 @@ fn averaging_is_staggered(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use serde_json::Value;
 
     /// A gradient-enhanced damage with implicit concrete is refused naming
     /// both keys; with the integration unset it takes IMPL-EX.
@@ -381,5 +390,25 @@ mod tests {
             err.contains("bar.diameter: ") && err.contains("quantity with a unit"),
             "{err}"
         );
+    }
+
+    /// The undocumented sections list exactly the keys their parser
+    /// accepts: one it reads is in the schema, a made-up one is not.
+    #[test]
+    fn undocumented_sections_list_the_parsers_keys() {
+        let scene = RawScene::schema();
+        for (section, known) in [("loading", "u_final"), ("solver", "max_iterations")] {
+            let properties = scene
+                .pointer(&format!("/properties/{section}/properties"))
+                .and_then(Value::as_object)
+                .unwrap_or_else(|| panic!("{section}: {scene}"));
+            assert!(properties.contains_key(known), "{section}: {properties:?}");
+            assert!(!properties.contains_key("no_such_key"));
+            let yaml = format!(
+                "name: s\nbar: {{kind: smooth, diameter: 8 mm}}\n{section}: {{{known}: 1}}\n"
+            );
+            let parsed: Result<RawScene, _> = serde_yaml::from_str(&yaml);
+            assert!(parsed.is_ok(), "{yaml}: {parsed:?}");
+        }
     }
 }

@@ -125,6 +125,16 @@ pub fn value_arg(v: &serde_yaml::Value) -> String {
     }
 }
 
+impl RawStudy {
+    /// The JSON Schema of a study file (`ribbar schema study`).
+    pub fn schema() -> serde_json::Value {
+        crate::schema::root::<RawStudy>(
+            "ribbar study",
+            "A ribbar study: a base scene and the values of the keys it varies.",
+        )
+    }
+}
+
 impl Study {
     pub fn load(path: &Path) -> Result<Study, StudyError> {
         let text = std::fs::read_to_string(path).map_err(|source| StudyError::Read {

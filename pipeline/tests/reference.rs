@@ -47,7 +47,10 @@ fn reference_pages_are_current() {
 /// field's doc comment; a key added without it fails here.
 #[test]
 fn every_key_has_its_doc_text() {
-    for schema in [pipeline::schema::scene(), pipeline::schema::study()] {
+    for schema in [
+        pipeline::scene::RawScene::schema(),
+        pipeline::study::RawStudy::schema(),
+    ] {
         let missing = pipeline::reference::undocumented_keys(&schema);
         assert!(
             missing.is_empty(),
@@ -61,7 +64,7 @@ fn every_key_has_its_doc_text() {
 /// group is reported by the same function.
 #[test]
 fn a_key_without_its_unit_and_default_is_reported() {
-    let mut schema = pipeline::schema::scene();
+    let mut schema = pipeline::scene::RawScene::schema();
     let description = schema
         .pointer_mut("/$defs/RawMeshSpec/properties/h_outer/description")
         .expect("mesh.h_outer has a description");

@@ -374,16 +374,10 @@ fn impl_ex_interface_redoes_the_onset_steps_and_keeps_the_curve() {
 /// A stiff, rough, strong interface (λ_0 = 1e-6 m, δ_s = 0.02, μ = 1,
 /// f_t = 10 MPa: stress sweep case 52 on the whole specimen) pushes the
 /// small cube apart until it splits. Its path bifurcates, and rounding
-/// picks the branch: with one order of the assembly's additions it
-/// snaps back from 17.8 MPa; with another it climbed through local
-/// snap-backs to a plateau at 25.8 MPa, where dissipation control's
-/// smallest step stalled with the points held from the first step, λ in
-/// place and damage growing in 3 044 of the 3 380 concrete tets, and
-/// ended on its cover cracked through (D ≥ 0.9 from the bar to the
-/// cube's faces); on a third (today's) it goes back to hold its points
-/// and stalls on a plateau at 16.0 MPa (u = 0.053 mm), where dissipation
-/// control's smallest step converges with λ in place but 283 held points
-/// cannot settle while damage grows in 3 207 of the 3 380 tets. On every
+/// picks the branch: it snaps back, climbs through local snap-backs to a
+/// plateau where it cracks through its cover, or holds its points on a
+/// plateau where they cannot settle (the branches the sweep met are in
+/// docs/src/validation/stress.md). On every
 /// branch the run ends as a result, `brittle_failure` at the largest
 /// force of its curve on one of the split's pieces of evidence (the
 /// cover cracked through, λ snapped back, held points unsettled), and

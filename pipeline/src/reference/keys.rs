@@ -341,7 +341,7 @@ fn keys_page(schema: &Value, name: &str, title: &str, intro: &str) -> String {
 /// `reference/scene.md`.
 pub fn scene_page() -> String {
     keys_page(
-        &crate::schema::scene(),
+        &crate::scene::RawScene::schema(),
         "RawScene",
         "Scene file",
         "A scene file is YAML. Every key is listed here with what it holds, its \
@@ -358,7 +358,7 @@ pub fn scene_page() -> String {
 /// `reference/study.md`.
 pub fn study_page() -> String {
     keys_page(
-        &crate::schema::study(),
+        &crate::study::RawStudy::schema(),
         "RawStudy",
         "Study file",
         "A study file (`ribbar study STUDY`) is YAML naming a base scene and the values \

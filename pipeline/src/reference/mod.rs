@@ -21,8 +21,8 @@ pub fn pages() -> Vec<(&'static str, String)> {
         ("scene.md", keys::scene_page()),
         ("study.md", keys::study_page()),
         ("units.md", keys::units_page()),
-        ("scene.schema.json", json(crate::schema::scene())),
-        ("study.schema.json", json(crate::schema::study())),
+        ("scene.schema.json", json(crate::scene::RawScene::schema())),
+        ("study.schema.json", json(crate::study::RawStudy::schema())),
     ]
 }
 
