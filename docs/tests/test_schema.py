@@ -4,6 +4,7 @@ JSON Schema validator, and refuse what ribbar refuses."""
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 from pathlib import Path
 
@@ -13,6 +14,9 @@ import yaml
 
 REPO = Path(__file__).resolve().parents[2]
 SCHEMA_LINE = "# yaml-language-server: $schema="
+# The ribbar under test: RIBBAR_BIN_DIR's (scripts/test.sh: the installed
+# package's), else the one on PATH.
+RIBBAR = str(Path(os.environ["RIBBAR_BIN_DIR"]) / "ribbar") if os.environ.get("RIBBAR_BIN_DIR") else "ribbar"
 
 
 def shipped_files() -> list[Path]:
@@ -28,7 +32,7 @@ def is_study(path: Path) -> bool:
 
 
 def schema(kind: str) -> dict:
-    done = subprocess.run(["ribbar", "schema", kind], capture_output=True, text=True, check=True)
+    done = subprocess.run([RIBBAR, "schema", kind], capture_output=True, text=True, check=True)
     return json.loads(done.stdout)
 
 
@@ -88,7 +92,7 @@ def test_wrong_scene_is_refused(change: dict, key: str, validators, tmp_path: Pa
     assert errors, scene
     path = tmp_path / "s.yaml"
     path.write_text(yaml.safe_dump(scene))
-    done = subprocess.run(["ribbar", "geometry", str(path), "--work", str(tmp_path / "w")],
+    done = subprocess.run([RIBBAR, "geometry", str(path), "--work", str(tmp_path / "w")],
                           capture_output=True, text=True)
     assert done.returncode == 1 and key in done.stderr, done.stderr
 
