@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Runs ribbar's benchmarks and writes their tables into docs/bench/.
+# Runs ribbar's benchmarks and writes their tables into docs/src/validation/bench/.
 # Installs CalculiX (Debian package calculix-ccx) and PETSc's petsc4py
 # (python3-petsc4py) first when missing, so the linear benchmark can compare
 # against them.
@@ -28,7 +28,7 @@ fi
 cargo build --release -p pipeline
 RIBBAR=target/release/ribbar
 WORK=${RIBBAR_BENCH_WORK:-target/bench-work}
-mkdir -p docs/bench
+mkdir -p docs/src/validation/bench
 
 # Linear-elastic perfect-bond pull-out at the spec's mesh (h_interface 0.4 mm).
-"$RIBBAR" bench linear --work "$WORK" --out docs/bench "$@"
+"$RIBBAR" bench linear --work "$WORK" --out docs/src/validation/bench "$@"

@@ -4,7 +4,7 @@
 # ROUNDS times, and prints each run's solve wall time, steps, Newton
 # iterations and steps on a best iterate, then `ribbar compare` of the last
 # round's curves. Extra arguments (e.g. --set specimen.symmetry=full) go to
-# this build's runs only: an old build may not know today's keys.
+# this build's runs only: an old build may not know this build's keys.
 # Usage: scripts/compare-builds.sh REV SPEC [ROUNDS] [-- ARGS...]
 set -eu
 cd "$(dirname "$0")/.."

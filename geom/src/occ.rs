@@ -112,7 +112,7 @@ pub struct Group {
 /// mesher chains the boundary curves with a tolerance of 1e-6 of the face's
 /// parameter diagonal, and fails on a face whose curves meet farther apart
 /// (the 35° failure before the model was built in millimetres;
-/// docs/geometry.md).
+/// docs/src/explanation/geometry.md).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct PeriodicFaceGap {
     /// gmsh tag of the surface (in the model `specimen.geo` builds).

@@ -11,19 +11,22 @@
 //! ```
 
 use crate::units::{Dim, RawQuantity, UnitError};
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::FRAC_PI_2;
 
 /// Smooth or spiral-ribbed bar.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "lowercase")]
 pub enum BarKind {
+    /// A plain cylinder of the diameter d.
     Smooth,
+    /// A core of the diameter d with transverse and longitudinal ribs.
     Ribbed,
 }
 
 /// How the ribs of side B (π < θ < 2π) derive from those of side A.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default, JsonSchema)]
 #[serde(rename_all = "lowercase")]
 pub enum SideB {
     /// Image of side A by the 180° rotation about the bar axis (spiral bar).
@@ -34,7 +37,7 @@ pub enum SideB {
 }
 
 /// `specimen.symmetry` as written: which part of the specimen is modelled.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default, JsonSchema)]
 #[serde(rename_all = "lowercase")]
 pub enum RawSymmetry {
     /// The smallest exact part: the quarter of a smooth bar's specimen, the
@@ -43,11 +46,13 @@ pub enum RawSymmetry {
     /// whole of a bar with a phase between its sides.
     #[default]
     Auto,
+    /// The whole specimen.
     Full,
     /// The half y ≥ 0: a smooth bar or a herringbone bar without phase (its
     /// mirror plane), a spiral bar without phase (the half-turn about the
     /// axis).
     Half,
+    /// The quarter x ≥ 0, y ≥ 0 of a smooth bar's specimen.
     Quarter,
 }
 
@@ -88,51 +93,96 @@ impl Symmetry {
     }
 }
 
+// Every field of the raw types below documents itself for the scene
+// reference and the JSON Schema (`ribbar schema scene`): its meaning, then
+// `(unit; default …; bounds)` as the last parenthesis of its doc comment.
+
 /// `bar` as written in the spec.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct RawBar {
+    /// Whether the bar is smooth or ribbed (choice; required).
     pub kind: BarKind,
+    /// Core (nominal) diameter d (length; required; > 0).
     pub diameter: RawQuantity,
+    /// The transverse ribs of a ribbed bar; an error for `kind: smooth`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub ribs: Option<RawRibs>,
+    /// The two longitudinal ribs (θ = 0, π) of a ribbed bar; an error for
+    /// `kind: smooth`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub longitudinal_ribs: Option<RawLongitudinalRibs>,
 }
 
-/// `bar.ribs` (transverse ribs) as written; every key is optional.
-#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+/// `bar.ribs` (transverse ribs) as written; every key is optional. In every
+/// plane through the bar axis a rib's section is an isosceles trapezoid
+/// whose axial widths are the widths below divided by sin β.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct RawRibs {
+    /// Transverse rib height a above the core (length; default 0.065 d;
+    /// 0 < a < d/2).
     pub height: Option<RawQuantity>,
+    /// Axial spacing c of the ribs of one side (length; default 0.625 d; > 0).
     pub spacing: Option<RawQuantity>,
+    /// Inclination β of the ribs to the bar axis, 90° giving rings; a plain
+    /// number is radians (angle; default 55 deg; in (0, 90] deg).
     pub angle: Option<RawQuantity>,
+    /// Crest width b_top, measured perpendicular to the rib at mid-rib
+    /// (length; default 0.1 d; > 0).
     pub top_width: Option<RawQuantity>,
+    /// Width b_base at the core surface; give it or `flank_angle`, not both
+    /// (length; default b_top + 2a, 45° flanks; b_top ≤ b_base < 0.98 c sin β,
+    /// so that neighbouring ribs do not touch).
     pub base_width: Option<RawQuantity>,
-    /// Flank inclination to the core surface; sets the base width
-    /// (b_base = b_top + 2a / tan α) instead of `base_width`.
+    /// Flank inclination α to the core surface; sets the base width
+    /// b_base = b_top + 2a / tan α instead of `base_width` (angle; default
+    /// 45 deg; in (0, 90] deg).
     pub flank_angle: Option<RawQuantity>,
+    /// How side B's ribs derive from side A's: `rotated` for a spiral bar,
+    /// `mirrored` for a herringbone bar (choice; default rotated).
     pub side_b: Option<SideB>,
+    /// Axial offset of side B's ribs from the rotated or mirrored image of
+    /// side A's (length; default 0; in [0, c)).
     pub phase: Option<RawQuantity>,
 }
 
 /// `bar.longitudinal_ribs` as written; every key is optional.
-#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct RawLongitudinalRibs {
+    /// Height a_l of the two longitudinal ribs above the core; the
+    /// transverse ribs end inside them (length; default a, the transverse
+    /// rib height; a ≤ a_l < d/2).
     pub height: Option<RawQuantity>,
+    /// Crest width (length; default b_top of the transverse ribs; > 0).
     pub top_width: Option<RawQuantity>,
+    /// Width where the flanks meet the core (length; default the top width
+    /// + 2 a_l; top width ≤ it ≤ d/2).
     pub base_width: Option<RawQuantity>,
 }
 
 /// `specimen` as written; every key is optional.
-#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct RawSpecimen {
+    /// Side L of the concrete cube; the cube spans x, y ∈ [−L/2, L/2],
+    /// z ∈ [0, L], z = 0 the free face and z = L the loaded (bearing) face
+    /// (length; default 10 d; wider than the bar's outer diameter).
     pub cube_side: Option<RawQuantity>,
+    /// Bonded length l_adh, z ∈ [0, l_adh] (length; default L/2;
+    /// 0 < l_adh ≤ L).
     pub adhesive_length: Option<RawQuantity>,
+    /// Bar length beyond the free face z = 0 (length; default 0.25 d; ≥ 0).
     pub free_overhang: Option<RawQuantity>,
+    /// Bar length beyond the loaded face z = L (length; default 0.5 d; ≥ 0).
     pub loaded_overhang: Option<RawQuantity>,
+    /// The modelled part of the specimen: `half` models y ≥ 0 (a smooth or
+    /// herringbone bar's mirror half, or a spiral bar's half-turn half, both
+    /// without phase), `quarter` x, y ≥ 0 (smooth bars only); forces, σ_mb,
+    /// FED and energies are always the whole specimen's. `half` with a
+    /// phase, or `quarter` on a ribbed bar, is an error naming the reason
+    /// (choice; default auto).
     pub symmetry: Option<RawSymmetry>,
 }
 

@@ -36,6 +36,18 @@ pub enum Dim {
 }
 
 impl Dim {
+    /// Every dimension, in the order the units reference lists them.
+    pub const ALL: [Dim; 8] = [
+        Dim::Length,
+        Dim::Stress,
+        Dim::EnergyPerArea,
+        Dim::StiffnessPerArea,
+        Dim::Angle,
+        Dim::Force,
+        Dim::Time,
+        Dim::Dimensionless,
+    ];
+
     /// The SI unit written in messages.
     pub fn si_unit(self) -> &'static str {
         match self {
@@ -51,7 +63,7 @@ impl Dim {
     }
 
     /// Units accepted for this dimension and their factor to SI.
-    fn units(self) -> &'static [(&'static str, f64)] {
+    pub fn units(self) -> &'static [(&'static str, f64)] {
         match self {
             Dim::Length => &[
                 ("m", 1.0),
@@ -124,6 +136,32 @@ impl fmt::Display for Dim {
 pub enum RawQuantity {
     Number(f64),
     Text(String),
+}
+
+/// A number, or a string of a number and a unit: what [`RawQuantity`]
+/// reads. The unit's dimension is the key's (its doc text says which), so
+/// the schema checks the form, the resolution the unit.
+const QUANTITY_PATTERN: &str =
+    r"^\s*[-+]?([0-9]+\.?[0-9]*|\.[0-9]+)([eE][-+]?[0-9]+)?\s*([^\s0-9.+-]\S*)?\s*$";
+
+impl schemars::JsonSchema for RawQuantity {
+    fn schema_name() -> std::borrow::Cow<'static, str> {
+        "Quantity".into()
+    }
+
+    fn inline_schema() -> bool {
+        true
+    }
+
+    fn json_schema(_: &mut schemars::SchemaGenerator) -> schemars::Schema {
+        schemars::json_schema!({
+            "description": "A number in SI units, or a number with a unit: 8 mm, \"30 GPa\", \"55 deg\".",
+            "anyOf": [
+                {"type": "number"},
+                {"type": "string", "pattern": QUANTITY_PATTERN}
+            ]
+        })
+    }
 }
 
 impl From<f64> for RawQuantity {

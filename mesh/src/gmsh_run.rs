@@ -107,7 +107,7 @@ fn gmsh_options(geo: &Path, spec: &MeshSpec) -> Vec<String> {
         // OpenCASCADE's booleans on their own threads: a ribbed bar's
         // fuse of core and ribs is most of the mesh stage, and the result
         // (hence the mesh) is the same as the serial one
-        // (docs/performance.md, "r1-coarse end to end").
+        // (docs/src/validation/performance.md, "r1-coarse end to end").
         ("Geometry.OCCParallel", "1".to_string()),
         ("Mesh.ElementOrder", "1".to_string()),
         ("h_interface", format!("{:e}", spec.h_interface)),

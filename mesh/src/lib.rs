@@ -188,7 +188,7 @@ fn mesh_checked(
     let (run, used, fallback) = match run_gmsh(gmsh, geo, spec, &tmp_msh) {
         // gmsh 4.15.2's HXT aborts ("double free or corruption") in the
         // boundary recovery of some rib designs after inserting Steiner
-        // points (35° ribs; docs/mesh.md), where Delaunay meshes them.
+        // points (35° ribs; docs/src/explanation/mesh.md), where Delaunay meshes them.
         Err(MeshError::GmshFailed { status, output, .. })
             if spec.algorithm_3d == spec::Algorithm3d::Hxt =>
         {

@@ -11,6 +11,7 @@
 
 use crate::MeshError;
 use geom::units::{Dim, RawQuantity};
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 /// Default interface mesh size (paper §3.3): 0.4 mm.
@@ -21,7 +22,7 @@ pub const DEFAULT_H_OUTER: f64 = 5e-3;
 pub const DEFAULT_TIMEOUT: f64 = 600.0;
 
 /// gmsh's 3D meshing algorithm (`Mesh.Algorithm3D`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "lowercase")]
 pub enum Algorithm3d {
     /// Delaunay (`Mesh.Algorithm3D = 1`): robust; faster on coarse meshes.
@@ -48,7 +49,7 @@ impl Algorithm3d {
 }
 
 /// Mesh optimisation after 3D meshing.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "lowercase")]
 pub enum Optimize {
     /// No optimisation (`Mesh.Optimize = 0`): thousands of poor tets remain.
@@ -60,38 +61,60 @@ pub enum Optimize {
 }
 
 /// `optimize` accepts `true`/`false` or a named optimiser.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(untagged)]
 pub enum RawOptimize {
     Flag(bool),
     Named(Optimize),
 }
 
-/// The `mesh` section as written in the spec (all keys optional).
-#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+/// The `mesh` section as written in the spec (all keys optional). Every
+/// field's doc comment ends with `(unit; default …; bounds)`: the scene
+/// reference and `ribbar schema scene` are generated from them.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct RawMeshSpec {
-    /// Mesh size at the steel/concrete interface (length; default 0.4 mm).
+    /// Element size on the steel/concrete interface and in the whole bar,
+    /// passed to the `.geo` as `-setnumber h_interface` (length; default
+    /// 0.4 mm; > 0).
     pub h_interface: Option<RawQuantity>,
-    /// Mesh size at the cube's outer faces (length; default 5 mm).
+    /// Element size at the cube's outer faces, `-setnumber h_outer` (length;
+    /// default 5 mm; ≥ h_interface).
     pub h_outer: Option<RawQuantity>,
-    /// Largest mesh size in the bar's core (length; default: the whole bar at
-    /// h_interface).
+    /// Largest element size in the bar's core: h_interface in a band of two
+    /// rib heights (at least 2 h_interface) under the surface, then growing
+    /// by half the depth toward the axis up to this size (length; default
+    /// none: the whole bar at h_interface; ≥ h_interface).
     pub h_bar_core: Option<RawQuantity>,
-    /// Largest mesh size along the bar's unbonded part, between a band of
-    /// one diameter past the bonded zone and the bearing face (length;
-    /// default: as the bonded zone).
+    /// Largest element size along the bar's unbonded part: from a band of one
+    /// diameter (at least two rib heights and 2 h_interface) past the bonded
+    /// zone to the bearing face z = L the size grows by half the distance to
+    /// the nearer of the two, up to this size; the bearing face and the
+    /// loaded overhang keep their sizes, their reactions being the solver's
+    /// force scale (length; default none: sized as the bonded zone;
+    /// ≥ h_interface).
     pub h_unbonded: Option<RawQuantity>,
-    /// gmsh 3D algorithm: delaunay | frontal | mmg3d | hxt (default hxt).
+    /// gmsh's `Mesh.Algorithm3D`; HXT is about ten times faster than
+    /// Delaunay at the paper's mesh, and its mesh changes with `threads`
+    /// (choice; default hxt).
     pub algorithm_3d: Option<Algorithm3d>,
-    /// true | false | gmsh | netgen | none (default true = gmsh).
+    /// Mesh optimisation: `true` is gmsh's optimiser (`Mesh.Optimize`),
+    /// `netgen` adds `Mesh.OptimizeNetgen` (absent from some gmsh builds);
+    /// without it thousands of tets stay below quality 0.1 (choice; default
+    /// true).
     pub optimize: Option<RawOptimize>,
-    /// gmsh threads (default 1: HXT's mesh changes with the thread count).
+    /// gmsh threads, `General.NumThreads`; 1 keeps the mesh reproducible
+    /// (count; default 1; ≥ 1).
     pub threads: Option<u32>,
-    /// Wall-clock limit for gmsh (time; default 600 s).
+    /// Wall-clock limit of one gmsh run, after which gmsh is stopped (time;
+    /// default 600 s; > 0).
     pub timeout: Option<RawQuantity>,
-    /// Write the whole specimen made of the meshed part and its images
-    /// (default false).
+    /// The model is the whole specimen made of the meshed part
+    /// (`specimen.symmetry`) and its images, so that the whole's mesh has the
+    /// part's symmetry exactly: a whole-specimen run that differs from the
+    /// part's only in the symmetry it does not impose. `mesh.json` reports
+    /// the whole, with `unfolded_from`; no effect on a whole part (bool;
+    /// default false).
     pub unfold: Option<bool>,
 }
 

@@ -1,5 +1,6 @@
 //! VTK XML unstructured grid (`.vtu`) of the model's tets, with cell data
-//! `region` (1 steel, 2 concrete), `quality` (3 r_in / R_circ) and `size`
+//! `region` (0 steel, 1 concrete, the codes of the solve's field files),
+//! `quality` (3 r_in / R_circ) and `size`
 //! (eq. 11, m). Binary data in one raw appended block (UInt64 headers),
 //! which ParaView and meshio read.
 
@@ -49,8 +50,8 @@ pub fn model_vtu(model: &Model) -> Vec<u8> {
         .iter()
         .flat_map(|r| {
             match r {
-                Region::Steel => 1i32,
-                Region::Concrete => 2i32,
+                Region::Steel => 0i32,
+                Region::Concrete => 1i32,
             }
             .to_le_bytes()
         })
@@ -167,8 +168,9 @@ mod tests {
             pos += 8 + n;
         }
         assert_eq!(&bytes[pos..], b"\n</AppendedData>\n</VTKFile>\n");
-        // The region array says steel then concrete; offsets end at 8.
+        // The region array says steel (0) then concrete (1), as the field
+        // files do; offsets end at 8.
         let region_at = bytes.len() - 28 - (8 + 16) - (8 + 16) - 8;
-        assert_eq!(&bytes[region_at..region_at + 8], &[1, 0, 0, 0, 2, 0, 0, 0]);
+        assert_eq!(&bytes[region_at..region_at + 8], &[0, 0, 0, 0, 1, 0, 0, 0]);
     }
 }

@@ -8,7 +8,7 @@ use mesh::MeshSpec;
 /// The mesh stage's options reach gmsh without its per-user temporary file
 /// `~/.gmsh-tmp`, through which gmsh parses a `-string`: runs started
 /// together overwrite and remove each other's, and a run that lost it
-/// meshed with gmsh's defaults (docs/mesh.md). With that file made
+/// meshed with gmsh's defaults (docs/src/explanation/mesh.md). With that file made
 /// unwritable (a directory in its place), `run_gmsh` still meshes with the
 /// spec's options, byte for byte as with a usable home, while the same
 /// options given as a `-string` are lost and the mesh changes.

@@ -60,7 +60,7 @@ where
     // hands its work to the workers and parks the caller until they
     // finish; the solve makes thousands of such calls per second (each
     // Krylov iteration, each assembly), and the hand-offs weighed on it
-    // (docs/performance.md, "r1-coarse end to end"). From a worker the
+    // (docs/src/validation/performance.md, "r1-coarse end to end"). From a worker the
     // same loops split on its own deque, with the same results.
     let outcome = rayon::scope(|_| dispatch(cli.command, &printer));
     match outcome {
@@ -97,6 +97,7 @@ fn dispatch(command: Command, printer: &Printer) -> Result<ExitCode> {
         Command::Study(a) => crate::study_run::run(&a, printer),
         Command::Bench(a) => crate::bench::run(&a, printer),
         Command::Compare(a) => crate::commands::compare(&a),
+        Command::Schema(a) => crate::commands::schema(&a),
     }
 }
 

@@ -1,5 +1,5 @@
 //! `ribbar bench`: run time against error, written as Markdown tables and
-//! plots (see docs/performance.md).
+//! plots (see docs/src/validation/performance.md).
 //!
 //! `ribbar bench linear`: the linear-elastic perfect-bond pull-out of
 //! smooth-80 (SPEC §9) solved by each of ribbar's linear solvers, by

@@ -278,7 +278,7 @@ fn mesh_series_plan(quick: bool) -> Result<Vec<Series>> {
     }
 }
 
-/// `ribbar bench mesh-series`: see the module doc and docs/performance.md.
+/// `ribbar bench mesh-series`: see the module doc and docs/src/validation/performance.md.
 pub fn mesh_series(args: &BenchArgs, printer: &Printer) -> Result<ExitCode> {
     let work = std::path::absolute(&args.work)
         .with_context(|| format!("work directory {}", args.work.display()))?;
@@ -292,7 +292,7 @@ pub fn mesh_series(args: &BenchArgs, printer: &Printer) -> Result<ExitCode> {
          Per grid: free DOFs, wall time per stage (geometry, mesh, solve and the solve's phases: \
          assembly / constitutive / factorisation / solve, s), peak σ_mb and the energy under the \
          σ_mb–FED curve, each with its relative error against the Richardson extrapolation of the \
-         finest triplet and its GCI (Celik et al. 2008, safety factor 1.25; docs/post.md), and the \
+         finest triplet and its GCI (Celik et al. 2008, safety factor 1.25; docs/src/explanation/post.md), and the \
          solve's energy balance (largest |W_ext − W_int|/W_ext). Times are those of the runs that \
          produced the cached artifacts, on this 2-core machine shared with other jobs.\n",
         command_line("mesh-series", args)
@@ -460,7 +460,7 @@ fn truncate(s: &str, n: usize) -> String {
 /// get through R1 coarse: with 1e-7 (strict) its steps were cut to 0.1 µm
 /// by u = 0.024 mm after 8 minutes, with 1e-6 (steps in a threshold
 /// two-cycle ending within 1e-4) they crawled at u = 0.218 mm after 7
-/// minutes; the two-cycles' residual is ~1e-4 (docs/solver.md). Steps of
+/// minutes; the two-cycles' residual is ~1e-4 (docs/src/validation/solver.md). Steps of
 /// 5 µm with energy 1e-10 and GMRES 1e-8 took 10-15 s each on the shared
 /// machine (some 45 minutes for the curve). `solver.expert.linear_solver:
 /// cholesky` and `pcg` are not variants: on the symmetric part of the
@@ -531,7 +531,7 @@ pub fn solver_variants() -> Vec<(&'static str, Vec<&'static str>)> {
 /// reported as not completed instead of holding the bench for hours.
 const SETTINGS_MAX_STEPS: &str = "solver.expert.max_steps=600";
 
-/// `ribbar bench solver-settings`: see the module doc and docs/performance.md.
+/// `ribbar bench solver-settings`: see the module doc and docs/src/validation/performance.md.
 pub fn solver_settings(args: &BenchArgs, printer: &Printer) -> Result<ExitCode> {
     let work = std::path::absolute(&args.work)
         .with_context(|| format!("work directory {}", args.work.display()))?;
@@ -564,7 +564,7 @@ pub fn solver_settings(args: &BenchArgs, printer: &Printer) -> Result<ExitCode> 
         md,
         "# Solver settings: run time against curve error ({label})\n\n\
          Command: `{}`\n\n\
-         One mesh ({}), one run per setting; the first row is the reference (10 µm steps; docs/performance.md). \
+         One mesh ({}), one run per setting; the first row is the reference (10 µm steps; docs/src/validation/performance.md). \
          Curve error: relative L2 distance of σ_mb along the imposed displacement to the \
          reference's, over their common range (`post::curve_distance`); peak error: relative \
          difference of the peak σ_mb. Solve wall time of the run (2 shared cores).\n",
@@ -767,11 +767,11 @@ pub fn stress_report(
          bar's limit load, {brittle} at a brittle failure (the cube splits at its peak; \
          {cracked} of them with the cover cracked through), \
          {unloaded} unloaded: split through or pulled free; \
-         docs/solver.md, \"How a run ends\"), {} stopped with a reason, \
+         docs/src/validation/solver.md, \"How a run ends\"), {} stopped with a reason, \
          {panics} panics, {nans} with a non-finite value in curve.csv, {unexplained} unexplained, \
          {energy_fail} failing the energy check (tolerance {} of W_ext on the converged steps).\n\n\
          Energy imbalance: max over the converged steps of |W_ext − W_int|/W_ext; dissipation \
-         increment: min over the steps of ΔW_diss/W_ext (docs/stress.md).\n",
+         increment: min over the steps of ΔW_diss/W_ext (docs/src/validation/stress.md).\n",
         study.name,
         study_file.display(),
         n - completed,

@@ -60,6 +60,23 @@ pub enum Command {
     Bench(BenchArgs),
     /// Distance between two runs' σ_mb curves (relative L2) and their first peaks.
     Compare(CompareArgs),
+    /// Print the JSON Schema of scene or study files (for editors and validators).
+    Schema(SchemaArgs),
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum, PartialEq, Eq)]
+pub enum SchemaKind {
+    /// A scene file (`ribbar run SCENE`).
+    Scene,
+    /// A study file (`ribbar study STUDY`).
+    Study,
+}
+
+#[derive(Debug, Args)]
+pub struct SchemaArgs {
+    /// Which file's schema.
+    #[arg(value_enum)]
+    pub kind: SchemaKind,
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum, PartialEq, Eq)]
@@ -81,7 +98,7 @@ pub struct BenchArgs {
     #[arg(long, default_value = "ribbar-work")]
     pub work: PathBuf,
     /// Where the Markdown table and plots are written.
-    #[arg(long, default_value = "docs/bench")]
+    #[arg(long, default_value = "docs/src/validation/bench")]
     pub out: PathBuf,
     /// Override a spec key of the benchmark's scenes (repeatable).
     #[arg(long = "set", value_name = "KEY=VALUE")]
@@ -100,8 +117,10 @@ pub struct BenchArgs {
 pub struct CleanArgs {
     /// Scene spec whose results are removed.
     pub spec: Option<PathBuf>,
+    /// Work directory holding the artifact store and `<scene>/` results.
     #[arg(long, default_value = "ribbar-work")]
     pub work: PathBuf,
+    /// Override a spec key, as for the stage commands (repeatable).
     #[arg(long = "set", value_name = "KEY=VALUE")]
     pub overrides: Vec<String>,
     /// Remove the whole work directory's store as well.
@@ -139,6 +158,7 @@ pub struct MaterialArgs {
 
 #[derive(Debug, Clone, Copy, ValueEnum, PartialEq, Eq)]
 pub enum ExportFormat {
+    /// A Snakefile whose rules call the stage commands (`snakemake -s WORK/<study>/Snakefile`).
     Snakemake,
 }
 
@@ -146,6 +166,7 @@ pub enum ExportFormat {
 pub struct StudyArgs {
     /// Study file (YAML).
     pub study: PathBuf,
+    /// Work directory holding the artifact store, the cases' and the study's results.
     #[arg(long, default_value = "ribbar-work")]
     pub work: PathBuf,
     /// Cases run at once.

@@ -1,6 +1,6 @@
 //! Command bodies shared by the binary and the study runner.
 
-use crate::cli::{CleanArgs, CompareArgs, CompareAxis, MaterialArgs};
+use crate::cli::{CleanArgs, CompareArgs, CompareAxis, MaterialArgs, SchemaArgs, SchemaKind};
 use crate::progress::Printer;
 use crate::scene::Scene;
 use crate::stage::{Ctx, Keys, Stage};
@@ -125,5 +125,16 @@ pub fn material(args: &MaterialArgs) -> Result<ExitCode> {
         }
         None => table.write_csv(std::io::stdout().lock())?,
     }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// Prints the JSON Schema of a scene or study file.
+pub fn schema(args: &SchemaArgs) -> Result<ExitCode> {
+    let schema = match args.kind {
+        SchemaKind::Scene => crate::scene::RawScene::schema(),
+        SchemaKind::Study => crate::study::RawStudy::schema(),
+    };
+    let mut out = std::io::stdout().lock();
+    writeln!(out, "{}", serde_json::to_string_pretty(&schema)?)?;
     Ok(ExitCode::SUCCESS)
 }

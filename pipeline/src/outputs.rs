@@ -4,38 +4,59 @@
 //! everything else is read by post alone, so changing it reruns post only.
 
 use geom::units::{Dim, RawQuantity};
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
-#[derive(Debug, Clone, Default, Deserialize, Serialize)]
+/// The `outputs` section as written. Every field's doc comment ends with
+/// `(unit; default …; bounds)`: the scene reference and `ribbar schema
+/// scene` are generated from them.
+#[derive(Debug, Clone, Default, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct RawOutputs {
+    /// Which converged states the solve writes as VTU fields; read by the
+    /// solve stage (a field needs the state at its step), so changing it
+    /// reruns the solve.
     pub fields: Option<RawFields>,
-    /// FED up to which the energy under the σ_mb–FED curve is integrated (default 1 mm).
+    /// FED up to which the energy under the σ_mb–FED curve is integrated,
+    /// `summary.json`'s `curve.energy` (length; default 1 mm; > 0).
     pub energy_fed_limit: Option<RawQuantity>,
-    /// Fraction of the final FED over which the residual σ_mb is averaged (default 0.2).
+    /// The residual σ_mb is the mean over this last fraction of the final
+    /// FED (pure number; default 0.2; in (0, 1]).
     pub residual_fraction: Option<f64>,
-    /// Plot formats among png, svg (default both); empty list: no plots.
+    /// Formats of `plots/bond_slip.*` and `plots/interface_profile.*`; an
+    /// empty list writes none (list of png, svg; default [png, svg]).
     pub plots: Option<Vec<PlotFormat>>,
 }
 
-#[derive(Debug, Clone, Default, Deserialize, Serialize)]
+/// `outputs.fields` as written.
+#[derive(Debug, Clone, Default, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct RawFields {
-    /// Converged step numbers at which VTU fields are written.
+    /// Converged step numbers at which the fields are written
+    /// (`fields/stepNNNN_bulk.vtu`, `…_interface.vtu`) and the interface
+    /// traction profile is sampled (list of counts; default []).
     pub steps: Option<Vec<usize>>,
-    /// Also at the step of peak bond stress (default true).
+    /// Also at the step of the first peak of the bond stress,
+    /// `fields/peak_*.vtu` (bool; default true).
     pub at_peak: Option<bool>,
-    /// Also at the last converged step (default true).
+    /// Also at the last converged step, `fields/end_*.vtu` (bool; default
+    /// true).
     pub at_end: Option<bool>,
-    /// A half or quarter model's fields on the whole specimen, its mirror
-    /// images included (default false: the modelled part).
+    /// A half or quarter model's fields on the whole specimen: the model and
+    /// its images, displacements reflected, cell values copied (the
+    /// interface's t_h and s_h signed with the image's frame); the curve and
+    /// the profiles are the same either way; no effect on a whole model
+    /// (bool; default false).
     pub whole_specimen: Option<bool>,
 }
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+/// A plot file format.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, JsonSchema)]
 #[serde(rename_all = "lowercase")]
 pub enum PlotFormat {
+    /// PNG image.
     Png,
+    /// SVG drawing.
     Svg,
 }
 

@@ -5,27 +5,43 @@ use crate::outputs::{Outputs, RawOutputs};
 use crate::overrides::Override;
 use geom::spec::{Bar, RawBar, RawSpecimen, Specimen};
 use mesh::spec::{MeshSpec, RawMeshSpec};
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 use solve::spec::materials::{Materials, NonAdhesive, RawMaterials};
 use solve::spec::solver::{Loading, RawLoading, RawSolver, SolverSettings};
 use std::path::{Path, PathBuf};
 
-/// The spec as written (after overrides).
-#[derive(Debug, Clone, Deserialize)]
+/// The spec as written (after overrides). Every field's doc comment is its
+/// text in the scene reference and the JSON Schema (`ribbar schema scene`).
+#[derive(Debug, Clone, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct RawScene {
+    /// The scene's name: its results go to `WORK/<name>/` (text; required;
+    /// 1–100 letters, digits, `-`, `_` or `.`, not starting with `.`).
     pub name: String,
+    /// The bar: smooth or ribbed, its diameter and its ribs.
     pub bar: RawBar,
+    /// The pull-out specimen: the concrete cube, the bonded length, the
+    /// bar's overhangs and the modelled part.
     #[serde(default)]
+    #[schemars(with = "crate::schema::SpecimenSection")]
     pub specimen: RawSpecimen,
+    /// How gmsh meshes the specimen.
     #[serde(default)]
     pub mesh: RawMeshSpec,
+    /// The constitutive laws of the concrete, the steel and the interface.
     #[serde(default)]
     pub materials: RawMaterials,
+    /// The imposed displacement of the bar's loaded end and its steps.
     #[serde(default)]
+    #[schemars(schema_with = "crate::schema::loading_section")]
     pub loading: RawLoading,
+    /// The nonlinear solver: convergence criteria, linear solvers,
+    /// integration of the laws.
     #[serde(default)]
+    #[schemars(schema_with = "crate::schema::solver_section")]
     pub solver: RawSolver,
+    /// Which fields, plots and summary quantities are produced.
     #[serde(default)]
     pub outputs: RawOutputs,
     /// `specimen.non_adhesive`, taken out of the `specimen` section before
@@ -223,6 +239,14 @@ impl Scene {
 }
 
 impl RawScene {
+    /// The JSON Schema of a scene file (`ribbar schema scene`).
+    pub fn schema() -> serde_json::Value {
+        crate::schema::root::<RawScene>(
+            "ribbar scene",
+            "A ribbar scene: one pull-out specimen, its mesh, laws, loading, solver and outputs.",
+        )
+    }
+
     pub fn resolve(&self) -> Result<Scene, SectionError> {
         check_name(&self.name).map_err(SectionError::Name)?;
         let (bar, geometry) = geom::spec::resolve(&self.bar, &self.specimen)?;
@@ -285,6 +309,7 @@ fn averaging_is_staggered(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use serde_json::Value;
 
     /// A gradient-enhanced damage with implicit concrete is refused naming
     /// both keys; with the integration unset it takes IMPL-EX.
@@ -404,5 +429,25 @@ mod tests {
         );
         let scene = Scene::from_yaml(SCENE, path, &["solver.expert.growth=2".into()]).unwrap();
         assert_eq!(scene.loading.growth, 2.0);
+    }
+
+    /// The undocumented sections list exactly the keys their parser
+    /// accepts: one it reads is in the schema, a made-up one is not.
+    #[test]
+    fn undocumented_sections_list_the_parsers_keys() {
+        let scene = RawScene::schema();
+        for (section, known) in [("loading", "u_final"), ("solver", "max_iterations")] {
+            let properties = scene
+                .pointer(&format!("/properties/{section}/properties"))
+                .and_then(Value::as_object)
+                .unwrap_or_else(|| panic!("{section}: {scene}"));
+            assert!(properties.contains_key(known), "{section}: {properties:?}");
+            assert!(!properties.contains_key("no_such_key"));
+            let yaml = format!(
+                "name: s\nbar: {{kind: smooth, diameter: 8 mm}}\n{section}: {{{known}: 1}}\n"
+            );
+            let parsed: Result<RawScene, _> = serde_yaml::from_str(&yaml);
+            assert!(parsed.is_ok(), "{yaml}: {parsed:?}");
+        }
     }
 }

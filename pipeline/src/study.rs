@@ -15,39 +15,67 @@
 //! name `<study>--<index>`; its stages share the store with every other case,
 //! so cases that agree on a stage's inputs share that stage's artifacts.
 
+use schemars::JsonSchema;
 use serde::Deserialize;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Default)]
+/// What a study computes from its cases.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Default, JsonSchema)]
 #[serde(rename_all = "lowercase")]
 pub enum StudyKind {
+    /// One case per combination of the values; a table and a plot of all
+    /// curves.
     #[default]
     Sweep,
+    /// A series over one size key (a mesh size or a step size): observed
+    /// order, Richardson extrapolation, GCI, the least-squares uncertainty
+    /// and the curve distance of each size to the next finer one.
     Convergence,
 }
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Default)]
+/// How the parameter lists make cases.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Default, JsonSchema)]
 #[serde(rename_all = "lowercase")]
 pub enum Combine {
+    /// Every combination of the lists' values.
     #[default]
     Product,
+    /// The lists side by side, of equal lengths: case i takes the i-th value
+    /// of each.
     Zip,
 }
 
-#[derive(Debug, Clone, Deserialize)]
+/// A study file as written. Every field's doc comment is its text in the
+/// study reference and the JSON Schema (`ribbar schema study`).
+#[derive(Debug, Clone, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct RawStudy {
+    /// The study's name: its tables and plots go to `WORK/<name>/`, its
+    /// cases are named `<name>--<i>` (text; required; letters, digits, `-`,
+    /// `_` or `.`).
     pub name: String,
+    /// The base scene, relative to the study file (path; required; an
+    /// existing file).
     pub base: PathBuf,
+    /// A sweep, or a convergence series whose first parameter is the size
+    /// (choice; default sweep).
     #[serde(default)]
     pub kind: StudyKind,
+    /// How the parameter lists make cases (choice; default product).
     #[serde(default)]
     pub combine: Combine,
-    /// Dotted spec key → list of values. Ordered as written.
+    /// Dotted scene key → list of values, e.g. `bar.ribs.angle: [40 deg,
+    /// 55 deg]`, in the order written; a convergence study's first key is
+    /// its size, with at least 3 values, and further keys need
+    /// `combine: zip` (mapping of lists; required; at least one key, no
+    /// empty list).
+    #[schemars(schema_with = "crate::schema::parameter_lists")]
     pub parameters: serde_yaml::Mapping,
-    /// Extra overrides applied to every case.
+    /// Dotted scene key → one value applied to every case (mapping; default
+    /// {}).
     #[serde(default)]
+    #[schemars(with = "BTreeMap<String, serde_json::Value>")]
     pub set: BTreeMap<String, serde_yaml::Value>,
 }
 
@@ -94,6 +122,16 @@ pub fn value_arg(v: &serde_yaml::Value) -> String {
             .unwrap_or_default()
             .trim()
             .to_string(),
+    }
+}
+
+impl RawStudy {
+    /// The JSON Schema of a study file (`ribbar schema study`).
+    pub fn schema() -> serde_json::Value {
+        crate::schema::root::<RawStudy>(
+            "ribbar study",
+            "A ribbar study: a base scene and the values of the keys it varies.",
+        )
     }
 }
 

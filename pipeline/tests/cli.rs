@@ -166,7 +166,60 @@ fn run_writes_every_artifact() {
         .filter(|e| e.file_name().to_string_lossy().contains(".tmp"))
         .collect();
     assert!(leftovers.is_empty(), "{leftovers:?}");
+    outputs_reference_names_everything(&scene);
     std::fs::remove_dir_all(&work).unwrap();
+}
+
+/// The user guide's output reference names every file of a scene's
+/// results, every column of curve.csv, every array of the field and mesh
+/// files and every key of summary.json's curve and of mesh.json: what a
+/// user reads there is what the files hold.
+fn outputs_reference_names_everything(scene: &Path) {
+    let page = read(&repo().join("docs/src/reference/outputs.md"));
+    let named = |name: &str| page.contains(&format!("`{name}`"));
+    let mut missing = Vec::new();
+    for entry in std::fs::read_dir(scene).unwrap() {
+        let name = entry.unwrap().file_name().to_string_lossy().into_owned();
+        // A directory is listed by its path (`fields/`, `plots/bond_slip.png`).
+        if !page.contains(&format!("`{name}")) {
+            missing.push(name);
+        }
+    }
+    let header = read(&scene.join("curve.csv"));
+    let columns = header.lines().next().unwrap().split(',').map(String::from);
+    let summary: serde_json::Value =
+        serde_json::from_str(&read(&scene.join("summary.json"))).unwrap();
+    let curve_keys = summary["curve"]
+        .as_object()
+        .unwrap()
+        .keys()
+        .map(|k| format!("curve.{k}"));
+    let mesh: serde_json::Value = serde_json::from_str(&read(&scene.join("mesh.json"))).unwrap();
+    let mesh_keys = mesh.as_object().unwrap().keys().cloned();
+    let arrays = [
+        "fields/peak_bulk.vtu",
+        "fields/peak_interface.vtu",
+        "mesh.vtu",
+    ]
+    .iter()
+    .flat_map(|f| {
+        // mesh.vtu's arrays are raw binary after its XML.
+        String::from_utf8_lossy(&std::fs::read(scene.join(f)).unwrap())
+            .split("Name=\"")
+            .skip(1)
+            .map(|s| s[..s.find('"').unwrap()].to_string())
+            .filter(|n| !matches!(n.as_str(), "Points" | "connectivity" | "offsets" | "types"))
+            .collect::<Vec<_>>()
+    });
+    for name in columns.chain(curve_keys).chain(mesh_keys).chain(arrays) {
+        if !named(&name) {
+            missing.push(name);
+        }
+    }
+    assert!(
+        missing.is_empty(),
+        "docs/src/reference/outputs.md does not name {missing:?}"
+    );
 }
 
 /// Issue 6: a second run with nothing changed runs nothing; a materials

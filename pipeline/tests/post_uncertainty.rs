@@ -78,7 +78,7 @@ fn scattered_series_are_covered() {
 }
 
 /// R1's energy to FED 1 mm with the paper's local damage law on 1.6, 1.2,
-/// 0.8 and 0.4 mm (docs/results/studies/r1-convergence.csv): Celik's
+/// 0.8 and 0.4 mm (docs/src/validation/results/studies/r1-convergence.csv): Celik's
 /// finest triplet is divergent, the least-squares estimate falls back to
 /// a fixed-order fit with the factor 3, and its uncertainty on the 0.4 mm
 /// grid covers the next grid of the fine series (3 753 J/m² on 0.28 mm,

@@ -210,7 +210,7 @@ fn threshold_two_cycles_are_settled_by_an_explicit_retry() {
 /// a stall), and a resume from the state it went back to gives the same
 /// curve bit for bit. (The energy balance across the
 /// discarded steps: `energy_tracker_rewound_equals_resumed`, and the
-/// stress sweep's case 21 in docs/stress-sweep.md.)
+/// stress sweep's case 21 in docs/src/validation/stress/stress-sweep.md.)
 #[test]
 fn a_stall_goes_back_and_holds_the_interface_points_that_chatter() {
     use solve::nonlinear::{Checkpoint, CommittedView, Ending, Observer, Silent};
@@ -374,16 +374,10 @@ fn impl_ex_interface_redoes_the_onset_steps_and_keeps_the_curve() {
 /// A stiff, rough, strong interface (λ_0 = 1e-6 m, δ_s = 0.02, μ = 1,
 /// f_t = 10 MPa: stress sweep case 52 on the whole specimen) pushes the
 /// small cube apart until it splits. Its path bifurcates, and rounding
-/// picks the branch: with one order of the assembly's additions it
-/// snaps back from 17.8 MPa; with another it climbed through local
-/// snap-backs to a plateau at 25.8 MPa, where dissipation control's
-/// smallest step stalled with the points held from the first step, λ in
-/// place and damage growing in 3 044 of the 3 380 concrete tets, and
-/// ended on its cover cracked through (D ≥ 0.9 from the bar to the
-/// cube's faces); on a third (today's) it goes back to hold its points
-/// and stalls on a plateau at 16.0 MPa (u = 0.053 mm), where dissipation
-/// control's smallest step converges with λ in place but 283 held points
-/// cannot settle while damage grows in 3 207 of the 3 380 tets. On every
+/// picks the branch: it snaps back, climbs through local snap-backs to a
+/// plateau where it cracks through its cover, or holds its points on a
+/// plateau where they cannot settle (the branches the sweep met are in
+/// docs/src/validation/stress.md). On every
 /// branch the run ends as a result, `brittle_failure` at the largest
 /// force of its curve on one of the split's pieces of evidence (the
 /// cover cracked through, λ snapped back, held points unsettled), and
@@ -597,7 +591,7 @@ fn brittle_failure_curve(
     pipeline::post::parse_curve_csv(&curve, Path::new("curve.csv")).unwrap()
 }
 
-/// A case outside the stress sweep (case 9 of docs/stress-holdout.md: a
+/// A case outside the stress sweep (case 9 of docs/src/validation/stress/stress-holdout.md: a
 /// stiff, strong, brittle interface on a herringbone bar with 42° ribs):
 /// the cube splits. Dissipation control, with the interface points held
 /// (tried before a split is diagnosed), converges its smallest step with
@@ -606,7 +600,7 @@ fn brittle_failure_curve(
 /// that little energy. The run ends as a result, whose failure load is the
 /// largest force of the curve, at that step's λ. (The case that showed
 /// this first, holdout case 19, now takes another branch of its split,
-/// which snaps back; rounding picks the branch, docs/stress.md.
+/// which snaps back; rounding picks the branch, docs/src/validation/stress.md.
 /// Diagnosed before the held points were tried, a stall whose iterates
 /// wandered to λ < 0 was taken for a split on the stress sweep's case 21,
 /// which the held points carry to 0.3 mm:
@@ -664,7 +658,7 @@ fn a_split_whose_held_points_do_not_settle_ends_at_a_brittle_failure_at_the_peak
 /// that showed this first, smooth-holdout case 11, where the dissipated
 /// energy fell by 1.1 % of W_ext in one state, now takes another branch
 /// that never reaches such a state; rounding picks the branch,
-/// docs/stress.md.)
+/// docs/src/validation/stress.md.)
 #[test]
 fn a_state_that_creates_energy_is_refused() {
     let work = std::env::temp_dir().join(format!("ribbar-creates-energy-{}", std::process::id()));
@@ -781,7 +775,7 @@ fn multigrid_preconditioned_solve_follows_the_cholesky_curve() {
 }
 
 /// A smooth bar whose stiff, strong bond lets go at its peak (smooth
-/// holdout case 12, docs/smooth-holdout.md): dissipation control snaps the
+/// holdout case 12, docs/src/validation/stress/smooth-holdout.md): dissipation control snaps the
 /// path back towards the origin and the run ends at a brittle failure with
 /// no crack band through the cover. Its line says so instead of naming a
 /// split cube, and the split's words stay for a cover that is cracked

@@ -256,11 +256,11 @@ interface_tangent!(fczm_tangent_compression_band_sliding, "FCZM consistent tange
     fczm(), history: [[-3.3333e-6, 3e-5, 0.0]], at: [-3.3333e-6, 4e-5, 5e-6], regime: sliding_loading_i);
 interface_tangent!(fczm_tangent_compression_sliding_unloading, "FCZM consistent tangent matches finite differences when sliding back without damage growth (eqs. 19–21).",
     fczm(), history: [[-3.3333e-5, 6e-5, 0.0]], at: [-3.3333e-5, 3e-5, 0.0], regime: sliding_unloading_i);
-interface_tangent!(fczm_tangent_smoothed_band_open_loading, "Smoothed FCZM consistent tangent matches finite differences just open inside the contact band while damaging (docs/laws.md, contact smoothing).",
+interface_tangent!(fczm_tangent_smoothed_band_open_loading, "Smoothed FCZM consistent tangent matches finite differences just open inside the contact band while damaging (docs/src/explanation/laws.md, contact smoothing).",
     fczm_smoothed(), history: [[4e-5, 2e-5, 0.0]], at: [3e-7, 6e-5, 1e-5], regime: loading_i);
-interface_tangent!(fczm_tangent_smoothed_band_closed_sliding, "Smoothed FCZM consistent tangent matches finite differences just closed inside the contact band while sliding (docs/laws.md, contact smoothing).",
+interface_tangent!(fczm_tangent_smoothed_band_closed_sliding, "Smoothed FCZM consistent tangent matches finite differences just closed inside the contact band while sliding (docs/src/explanation/laws.md, contact smoothing).",
     fczm_smoothed(), history: [[4e-5, 6e-5, 0.0]], at: [-4e-7, 3e-5, -1e-5], regime: sliding_i);
-interface_tangent!(fczm_tangent_smoothed_band_centre, "Smoothed FCZM consistent tangent matches finite differences at u_n = 0 of a damaged interface (docs/laws.md, contact smoothing).",
+interface_tangent!(fczm_tangent_smoothed_band_centre, "Smoothed FCZM consistent tangent matches finite differences at u_n = 0 of a damaged interface (docs/src/explanation/laws.md, contact smoothing).",
     fczm_smoothed(), history: [[4e-5, 2e-5, 0.0]], at: [0.0, 1e-5, 2e-6], regime: unloading_i);
 interface_tangent!(fczm_tangent_pure_compression, "FCZM consistent tangent is K_n in undamaged compression (eqs. 17, 25).",
     fczm(), history: [], at: [-2e-5, 0.0, 0.0], regime: elastic_i);
@@ -338,7 +338,7 @@ impl Lcg {
 /// |u_n| < δ, where the normal traction moves by at most K_n δ/4 (the
 /// ramp's offset) times the closed/open stiffness difference and the
 /// damaged part's weight, and the traction stays continuous
-/// (docs/laws.md, contact smoothing).
+/// (docs/src/explanation/laws.md, contact smoothing).
 #[test]
 fn fczm_contact_smoothing_is_confined_to_its_band() {
     let sharp = fczm_calibrated();
@@ -618,7 +618,7 @@ fn mazars_fixed_regularisation_length() {
     ));
 }
 
-/// Secant tangents are what the docs say: (1 − D)C for Mazars, σ = K_sec u for Tvergaard (docs/laws.md).
+/// Secant tangents are what the docs say: (1 − D)C for Mazars, σ = K_sec u for Tvergaard (docs/src/explanation/laws.md).
 #[test]
 fn secant_tangents() {
     let law = mazars();

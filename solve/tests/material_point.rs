@@ -468,7 +468,7 @@ fn csv_columns() {
 
 /// Held tractions are met at every point (mixed control, issue 4); with the
 /// total σ_n held the FCZM's closed normal stiffness (1 + D) K_n shows as a
-/// shrinking u_n (docs/laws.md).
+/// shrinking u_n (docs/src/explanation/laws.md).
 #[test]
 fn held_normal_traction_under_shear() {
     let mut test = read_case("fczm-shear-compression-5MPa.yaml");

@@ -1571,7 +1571,7 @@ impl Observer for Trace {
 /// Dissipation control's steps are energies: they grow after easy steps
 /// up to the work of the load over `loading.max_step`, not up to
 /// `max_step` itself read as joules. With that reading case 9 of
-/// `docs/stress-holdout.md` (a herringbone bar on a stiff interface)
+/// `docs/src/validation/stress/stress-holdout.md` (a herringbone bar on a stiff interface)
 /// crept back along its snap-back at 2e-5 J a step, ~0.1 µm of λ, and
 /// stalled after 100 such steps; sized by the load it follows the
 /// snap-back in a few steps and completes.
@@ -1877,7 +1877,7 @@ fn yielding_bar_ends_at_its_limit_load() {
     );
     // Linear tets lock under isochoric plastic flow: the discrete limit
     // load of this 6-element-wide bar lies some per cent above σ_y A
-    // (1.09 σ_y A here; docs/solver.md, "Limit loads").
+    // (1.09 σ_y A here; docs/src/validation/solver.md, "Limit loads").
     assert!(
         force >= 0.9 * yield_force && force <= 1.15 * yield_force,
         "{force} of {yield_force}"
@@ -2522,7 +2522,7 @@ fn impl_ex_snap_back(
 /// longer matches the internal work. Holding the jumps of the points
 /// that soften (`path_following: process_zone`) bounds each step's
 /// damage: the path turns back in λ, every step's indicator stays near
-/// its tolerance and the energy balances (docs/solver.md,
+/// its tolerance and the energy balances (docs/src/validation/solver.md,
 /// "Process-zone control").
 #[test]
 fn process_zone_control_follows_a_snap_back_under_impl_ex() {

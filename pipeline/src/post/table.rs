@@ -436,7 +436,8 @@ pub fn write_convergence_tables(
 /// [`uncertainty_table`], each under its heading.
 pub fn convergence_markdown(studies: &[ConvergenceStudy]) -> String {
     let mut markdown = format!(
-        "## Grids\n\nErrors, GCI and uncertainty are relative; the error is against the \
+        "## Grids\n\nErrors, GCI and uncertainty are fractions of the value (0.01 is 1 %; \
+         the study's console line gives them in percent); the error is against the \
          Richardson extrapolation of the three finest grids, the uncertainty is the \
          least-squares estimate of all grids (below).\n\n{}\n## Observed order and \
          extrapolation (Celik et al. 2008, safety factor 1.25)\n\n{}",

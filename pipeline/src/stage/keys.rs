@@ -14,7 +14,8 @@ impl Stage {
     fn format(self) -> u32 {
         match self {
             Stage::Geometry => 4,
-            Stage::Mesh => 2,
+            // 3: mesh.vtu's `region` is 0 steel, 1 concrete, as in the fields.
+            Stage::Mesh => 3,
             Stage::Solve => 12,
             Stage::Post => 2,
         }

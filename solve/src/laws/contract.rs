@@ -268,7 +268,7 @@ pub trait InterfaceLaw: Sync {
     /// is: the law's traction with no damage growth and no slip, its exact
     /// tangent for `Consistent` (a smooth function of the jump but for the
     /// open/closed switch). A point Newton cannot settle is held so for
-    /// one attempt, then released to its implicit history (docs/solver.md,
+    /// one attempt, then released to its implicit history (docs/src/validation/solver.md,
     /// "Law switches").
     fn respond(
         &self,

@@ -91,7 +91,7 @@ fn is_zero(v: &f64) -> bool {
 /// normal stiffness, λ_0/λ open and (1 − D)β closed (25), and through
 /// σ_dn the shear weight α (26). With δ = 0 the switch is a kink in all
 /// three: at a rib edge pressed by nearly zero normal traction Newton then
-/// alternates between the open and the closed branch (docs/solver.md,
+/// alternates between the open and the closed branch (docs/src/validation/solver.md,
 /// "Law switches").
 pub fn contact_ramp(u: f64, delta: f64) -> (f64, f64) {
     if u < 0.0 && u <= -delta {

@@ -285,7 +285,7 @@ impl Cholesky {
         // One thread: faer's parallel triangular solve with one right-hand
         // side hands small pieces of each supernode to the pool, which
         // costs more than it gains at the sizes this preconditioner is
-        // chosen for (docs/performance.md, "r1-coarse end to end"), and
+        // chosen for (docs/src/validation/performance.md, "r1-coarse end to end"), and
         // its sums depended on the number of threads.
         let par = Par::Seq;
         let n = rhs.len();

@@ -27,6 +27,7 @@ use crate::laws::tvergaard::Tvergaard;
 use crate::laws::{AnyBulkLaw, AnyInterfaceLaw};
 use geom::units::{Dim, RawQuantity, UnitError};
 use mesh::Model;
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 /// Calibration ratio ξ of eqs. (27)–(28).
@@ -70,81 +71,148 @@ pub enum MaterialsSpecError {
     Inconsistent { key: String, detail: String },
 }
 
-/// `materials.concrete` as written.
-#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+// Every field of the raw types below documents itself for the scene
+// reference and the JSON Schema (`ribbar schema scene`): its meaning, then
+// `(unit; default …; bounds)` as the last parenthesis of its doc comment.
+
+/// `materials.concrete` as written: Mazars damage (paper §2.3; the elastic
+/// law reads only `E` and `nu`).
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct RawConcrete {
-    /// `mazars` (default) or `elastic`.
+    /// The concrete's law (choice; default mazars).
+    #[schemars(schema_with = "law_schema::<ConcreteLaw>")]
     pub law: Option<String>,
+    /// Young's modulus (stress; default 30 GPa; > 0).
     #[serde(rename = "E")]
     pub young_modulus: Option<RawQuantity>,
+    /// Poisson's ratio (pure number; default 0.2; in (−1, 0.5)).
     pub nu: Option<RawQuantity>,
+    /// Tensile strength; sets ε_D0 = ft / E; give `ft` or `eps_d0`, not both
+    /// (stress; default E ε_D0 = 3 MPa; > 0).
     pub ft: Option<RawQuantity>,
+    /// Damage threshold ε_D0 (pure number; default 1e-4; > 0).
     pub eps_d0: Option<RawQuantity>,
+    /// Shear exponent β of eq. (4) (pure number; default 1.06; > 0).
     pub beta: Option<RawQuantity>,
+    /// Fracture energy: Hillerborg tension softening (eq. 9), B_t per
+    /// element from its size l (eq. 11); an element too large for it
+    /// (l ≥ 2 G_f / (E ε_D0²)) is an error at solve time naming l and the
+    /// limit (energy per area; default 130 N/m; > 0).
     #[serde(rename = "Gf")]
     pub gf: Option<RawQuantity>,
+    /// A_t of the classic tension softening (eq. 5) instead of `Gf`; needs
+    /// `Bt` (pure number; default none; in [0, 1]).
     #[serde(rename = "At")]
     pub a_t: Option<RawQuantity>,
+    /// B_t of the classic tension softening (eq. 5) instead of `Gf`; needs
+    /// `At` (pure number; default none; > 0).
     #[serde(rename = "Bt")]
     pub b_t: Option<RawQuantity>,
+    /// A_c of the compression softening (eq. 5); needs `Bc` (pure number;
+    /// default: per element from eqs. (12)–(13); ≥ 0).
     #[serde(rename = "Ac")]
     pub a_c: Option<RawQuantity>,
+    /// B_c of the compression softening (eq. 5); needs `Ac` (pure number;
+    /// default: per element from eqs. (12)–(13); > 0).
     #[serde(rename = "Bc")]
     pub b_c: Option<RawQuantity>,
-    /// Mazars: the length eqs. (11)–(13) regularise with (default: each
-    /// tet's own size, as the paper).
+    /// The length l of eqs. (11)–(13) for every tet: one law for the whole
+    /// concrete, G_f / l dissipated per volume of a damage zone on any mesh,
+    /// for mesh-convergence studies where the damage spreads over many
+    /// elements. Mazars only; must admit `Gf`, l < 2 G_f / (E ε_D0²)
+    /// (length; default: each tet's own size, as the paper; > 0).
     pub regularisation_length: Option<RawQuantity>,
-    /// Mazars: the internal length of a gradient-enhanced damage (default:
-    /// none, each point's own strain, as the paper).
+    /// Internal length ℓ of a gradient-enhanced damage: κ follows the
+    /// equivalent strain averaged by ε̄ − ℓ²∇²ε̄ = ε_eq, so a damage zone's
+    /// width is set by ℓ, not by the elements. Mazars only; needs
+    /// `regularisation_length`; runs only with IMPL-EX concrete, which it
+    /// takes where `solver.concrete_integration` is unset; resolve ℓ with
+    /// h ≲ ℓ where the concrete damages (length; default none: each point's
+    /// own strain, as the paper; > 0).
     pub nonlocal_length: Option<RawQuantity>,
 }
 
 /// `materials.steel` as written.
-#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct RawSteel {
-    /// `j2` (default) or `elastic`.
+    /// The steel's law: von Mises perfectly plastic (`j2`) or `elastic`
+    /// (choice; default j2).
+    #[schemars(schema_with = "law_schema::<SteelLaw>")]
     pub law: Option<String>,
+    /// Young's modulus (stress; default 200 GPa; > 0).
     #[serde(rename = "E")]
     pub young_modulus: Option<RawQuantity>,
+    /// Poisson's ratio (pure number; default 0.3; in (−1, 0.5)).
     pub nu: Option<RawQuantity>,
+    /// Yield stress, `j2` only (stress; default 365 MPa; > 0).
     pub sigma_y: Option<RawQuantity>,
 }
 
-/// `materials.interface` as written.
-#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+/// `materials.interface` as written: the law of the adhesive zone.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct RawInterface {
-    /// `fczm` (default), `tvergaard`, `coulomb` or `elastic`.
+    /// The interface's law: the frictional cohesive zone (`fczm`, §3.1),
+    /// `tvergaard` (Appendix A), `coulomb` (Appendix B) or `elastic`
+    /// (choice; default fczm).
+    #[schemars(schema_with = "law_schema::<InterfaceLawChoice>")]
     pub law: Option<String>,
+    /// Interface tensile strength (eq. 27); fczm, tvergaard, coulomb (for
+    /// coulomb required, 0 ≤ ft ≤ C / tan φ) (stress; default ξ f_t of a
+    /// Mazars concrete; > 0).
     pub ft: Option<RawQuantity>,
+    /// Interface fracture energy (eq. 28); fczm, tvergaard (energy per area;
+    /// default ξ G_f of a Mazars concrete with `Gf`; > 0).
     #[serde(rename = "Gf")]
     pub gf: Option<RawQuantity>,
+    /// Damage threshold λ_0, K_n = ft / λ_0 (A.7); fczm, tvergaard (length;
+    /// default 5e-5 m; > 0).
     pub lambda0: Option<RawQuantity>,
+    /// Stiffness ratio K_n / K_s; fczm, tvergaard (pure number; default
+    /// eq. (29), 1 − 0.3889e-6 ft in Pa; > 0).
     pub delta_s: Option<RawQuantity>,
+    /// Friction coefficient; fczm (pure number; default 0.3; ≥ 0).
     pub mu: Option<RawQuantity>,
+    /// ζ of eq. (22); fczm (pure number; default 8; > 0).
     pub zeta: Option<RawQuantity>,
+    /// γ of eq. (26), a compressive stress; fczm (stress; default −1 MPa;
+    /// < 0).
     pub gamma: Option<RawQuantity>,
+    /// Half-width δ of a quadratic smoothing of the open/closed contact
+    /// switch, eqs. (16), (25), (26), over |u_n| < δ; 0 is the paper's sharp
+    /// switch; fczm (length; default 0; in [0, lambda0)).
     pub contact_smoothing: Option<RawQuantity>,
+    /// Calibration ratio ξ of eqs. (27)–(28), used only for `ft` and `Gf`
+    /// not given; fczm, tvergaard (pure number; default 0.72; in (0, 1]).
     pub xi: Option<RawQuantity>,
+    /// Normal stiffness; coulomb, elastic (stiffness per area; required by
+    /// those laws; > 0).
     #[serde(rename = "Kn")]
     pub kn: Option<RawQuantity>,
+    /// Shear stiffness; coulomb, elastic (stiffness per area; required by
+    /// those laws; > 0).
     #[serde(rename = "Ks")]
     pub ks: Option<RawQuantity>,
+    /// Cohesion; coulomb (stress; required by coulomb; > 0).
     #[serde(rename = "C")]
     pub cohesion: Option<RawQuantity>,
+    /// Friction angle; coulomb (angle; required by coulomb; in [0, 90°)).
     pub phi: Option<RawQuantity>,
 }
 
 /// The `materials` section as written.
-#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct RawMaterials {
+    /// The concrete: Mazars damage or elastic.
     #[serde(default)]
     pub concrete: RawConcrete,
+    /// The steel bar: J2 plasticity or elastic.
     #[serde(default)]
     pub steel: RawSteel,
+    /// The steel/concrete interface of the bonded zone.
     #[serde(default)]
     pub interface: RawInterface,
 }
@@ -210,7 +278,7 @@ pub struct Materials {
 /// What the interface of the non-adhesive zone z ∈ [l_adh, L] does
 /// (`specimen.non_adhesive`: the geometry is the same either way, only the
 /// law the solver puts there differs).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default, JsonSchema)]
 #[serde(rename_all = "lowercase")]
 pub enum NonAdhesive {
     /// Duplicated nodes and no interface element: no interaction at all.
@@ -385,6 +453,14 @@ fn law_kind<L: LawChoice>(raw: &Option<String>, prefix: &str) -> Result<L, Mater
                 .collect::<Vec<_>>()
                 .join(", "),
         })
+}
+
+/// The schema of a `law:` key: one of the law choice's names (absent or
+/// null for its default).
+fn law_schema<L: LawChoice>(_: &mut schemars::SchemaGenerator) -> schemars::Schema {
+    let mut names: Vec<serde_json::Value> = L::ACCEPTED.iter().map(|k| k.name().into()).collect();
+    names.push(serde_json::Value::Null);
+    schemars::json_schema!({ "enum": names })
 }
 
 /// Resolves `raw` as concrete under `prefix` (e.g. `materials.concrete`).
