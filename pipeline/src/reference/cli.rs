@@ -1,6 +1,6 @@
 //! The command-line reference, from clap's `Command` of [`crate::cli::Cli`].
 
-use super::{cell, GENERATED};
+use super::markdown::{cell, GENERATED};
 use clap::{Arg, ArgAction, Command, CommandFactory};
 
 /// `reference/cli.md`: every subcommand with its usage, arguments and options.

@@ -1,7 +1,7 @@
 //! The scene, study and units reference pages, from the JSON Schemas of
 //! the raw spec types and from `geom::units::Dim`.
 
-use super::{cell, GENERATED};
+use super::markdown::{cell, GENERATED};
 use crate::schema::UNDOCUMENTED;
 use serde_json::Value;
 use std::collections::HashMap;

@@ -9,6 +9,7 @@
 
 mod cli;
 mod keys;
+mod markdown;
 
 pub use keys::{undocumented_keys, KeyDoc};
 
@@ -24,16 +25,4 @@ pub fn pages() -> Vec<(&'static str, String)> {
         ("scene.schema.json", json(crate::scene::RawScene::schema())),
         ("study.schema.json", json(crate::study::RawStudy::schema())),
     ]
-}
-
-/// The line every generated page starts with.
-const GENERATED: &str = "<!-- Generated from the code by `pipeline::reference`; do not edit. \
-Rewrite with: RIBBAR_WRITE_REFERENCE=1 cargo test -p pipeline --test reference -->";
-
-/// Text for a Markdown table cell: one line, pipes escaped.
-fn cell(text: &str) -> String {
-    text.split_whitespace()
-        .collect::<Vec<_>>()
-        .join(" ")
-        .replace('|', "\\|")
 }
