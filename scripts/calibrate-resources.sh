@@ -21,9 +21,6 @@ runs=(
   "tests/data/tiny-smooth.yaml --set mesh.h_interface=1mm --set name=tiny-smooth-h1"
   "specs/smooth-80.yaml"
   "specs/r1-coarse.yaml"
-  "specs/r1-coarse.yaml --set mesh.h_interface=0.7mm --set name=r1-coarse-h0.7"
-  "specs/smooth-125.yaml"
-  "specs/r1.yaml"
 )
 [ -f "$out" ] || printf 'scene\tnodes\tplanned_steps\tsteps\tfree_dofs\tcpu_s\twall_s\tmax_rss_kib\n' > "$out"
 for run in "${runs[@]}"; do

@@ -19,10 +19,11 @@ pub fn estimated_solve_bytes(dofs: f64) -> f64 {
 
 /// Runtime model of a solve on one thread, s:
 /// `RUNTIME_S_PER_STEP · planned_steps · (dofs / 1e5)^RUNTIME_DOF_EXPONENT`,
-/// fitted in log space to the calibration runs.
-pub const RUNTIME_S_PER_STEP: f64 = 2.0;
+/// fitted in log space to the one-thread CPU times of the calibration runs
+/// (docs/src/validation/cluster-resources.md: within 0.79-1.50 of them).
+pub const RUNTIME_S_PER_STEP: f64 = 8.5;
 /// The exponent of the DOFs in the runtime model.
-pub const RUNTIME_DOF_EXPONENT: f64 = 1.1;
+pub const RUNTIME_DOF_EXPONENT: f64 = 1.4;
 
 /// A scene's solve before it runs.
 #[derive(Debug, Clone, Serialize)]

@@ -137,7 +137,15 @@ pub struct Store {
 /// on any host that shares the work directory; released on drop
 /// (`crate::store_lock`).
 pub struct KeyLock {
-    _lock: crate::store_lock::FileLock,
+    lock: crate::store_lock::FileLock,
+}
+
+impl KeyLock {
+    /// `Err` when another process took this lock while it was held (a file
+    /// system whose locks do not hold across hosts).
+    pub fn verify(&self) -> Result<(), StoreError> {
+        Ok(self.lock.verify()?)
+    }
 }
 
 impl Store {
@@ -187,7 +195,7 @@ impl Store {
         // directory revalidates it (close-to-open), so the `is_done` that
         // follows sees a commit another host made while this one waited.
         let _ = File::open(&root);
-        Ok(KeyLock { _lock: lock })
+        Ok(KeyLock { lock })
     }
 
     /// A fresh (emptied) in-progress directory for `key`. With `keep`, an

@@ -41,6 +41,12 @@ pub enum LockError {
         source: std::io::Error,
     },
     #[error(
+        "{path}: `{holder}` took this lock while this process held it: the file system \
+         grants record locks per host only, so jobs on different hosts may compute one stage \
+         at once; nothing was committed (docs/src/explanation/cluster-store.md)"
+    )]
+    Broken { path: PathBuf, holder: String },
+    #[error(
         "{path}: the file system refuses record locks ({source}); on Lustre mount it with \
          `-o flock`, on NFS without `nolock` and with lockd (NFSv3) or NFSv4; a store shared \
          by several hosts needs them (docs/src/explanation/cluster-store.md)"
@@ -96,6 +102,23 @@ pub fn lock_exclusive(path: &Path) -> Result<FileLock, LockError> {
         .and_then(|()| (&file).write_all(holder.as_bytes()));
     lock.file = Some(file);
     Ok(lock)
+}
+
+impl FileLock {
+    /// `Err` naming the other holder when the lock file no longer names
+    /// this process: another process took the lock while this one held it,
+    /// which happens only where the file system grants record locks per
+    /// host (Lustre's `localflock`, NFS's `nolock`).
+    pub fn verify(&self) -> Result<(), LockError> {
+        let ours = format!("{} {}\n", hostname(), std::process::id());
+        match std::fs::read_to_string(&self.path) {
+            Ok(holder) if holder != ours => Err(LockError::Broken {
+                path: self.path.clone(),
+                holder: holder.trim().to_string(),
+            }),
+            _ => Ok(()),
+        }
+    }
 }
 
 /// `fcntl(F_SETLKW)` on the whole file, retried when a signal interrupts it.
@@ -174,6 +197,14 @@ mod tests {
             holder.ends_with(&format!(" {}\n", std::process::id())),
             "{holder}"
         );
+        // Another holder's name in the file while this one holds the lock
+        // is what a lock that does not hold across hosts leaves.
+        let lock = lock_exclusive(&path).unwrap();
+        lock.verify().unwrap();
+        std::fs::write(&path, "elsewhere 1\n").unwrap();
+        let err = lock.verify().unwrap_err().to_string();
+        assert!(err.contains("`elsewhere 1` took this lock"), "{err}");
+        drop(lock);
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -27,7 +27,9 @@ CASE_PATTERN = "|".join(re.escape(case) for case in CASES)
 
 
 def run_logged(command, log):
-    """Runs a shell command with its output in the job's log."""
+    """Runs a shell command with its output appended to the job's log: a
+    retry's log follows the failed attempt's (a solve killed at its time
+    limit, then resumed)."""
     with open(log[0], "a") as out:
         out.write(f"$ {command}\n")
         out.flush()
@@ -47,7 +49,6 @@ def stage_command(stage, case, threads):
 
 
 def ribbar_stage(stage, wildcards, threads, log):
-    open(log[0], "w").close()
     run_logged(stage_command(stage, wildcards.case, threads), log)
 
 
@@ -60,7 +61,6 @@ def mesh_and_estimate(wildcards, threads, log, output):
 
 def collect_study(log):
     """The study's tables and plots from every case's published results."""
-    open(log[0], "w").close()
     run_logged(
         f"{RIBBAR} study {shlex.quote(STUDY)} --work {shlex.quote(WORK)} --collect", log
     )
