@@ -6,3 +6,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh --no-build
 cargo test --workspace -- --ignored
+# A study under a real single-node Slurm (about 10 min with the installs
+# cached, more on a fresh machine: Debian's slurm-wlm, snakemake and its
+# Slurm plugin from PyPI).
+bash scripts/test-slurm.sh
