@@ -347,11 +347,11 @@ fn a_stopped_case_is_kept_and_tabulated_as_ribbar_study_does() {
     std::fs::remove_dir_all(&root).unwrap();
 }
 
-/// Waits until `path` exists, at most `limit`.
-fn wait_for(path: &dyn Fn() -> bool, limit: Duration) -> bool {
+/// Waits until `done()`, at most `limit`; whether it came.
+fn wait_for(done: &dyn Fn() -> bool, limit: Duration) -> bool {
     let start = Instant::now();
     while start.elapsed() < limit {
-        if path() {
+        if done() {
             return true;
         }
         std::thread::sleep(Duration::from_millis(5));
@@ -367,6 +367,26 @@ fn checkpoint_written(work: &Path) -> bool {
                 .any(|e| e.path().join("checkpoint.bin").is_file())
         })
         .unwrap_or(false)
+}
+
+/// A `ribbar solve` of `args` (ending in `--work`) into `work`, its mesh
+/// made first, once it has written a checkpoint.
+fn solving(args: &[&str], work: &Path) -> std::process::Child {
+    ok(ribbar().arg("mesh").args(args).arg(work));
+    let child = ribbar()
+        .arg("solve")
+        .args(args)
+        .arg(work)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    assert!(
+        wait_for(&|| checkpoint_written(work), Duration::from_secs(120)),
+        "no checkpoint"
+    );
+    child
 }
 
 /// Issue 56: a solve sent SIGTERM (a scheduler's time limit, `scancel`)
@@ -391,20 +411,7 @@ fn a_sigterm_stops_the_solve_at_a_step_and_the_rerun_resumes_there() {
     let expected = std::fs::read(reference.join("tiny-smooth/curve.csv")).unwrap();
 
     let work = root.join("work");
-    ok(ribbar().arg("mesh").args(slow).arg(&work));
-    let child = ribbar()
-        .arg("solve")
-        .args(slow)
-        .arg(&work)
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    assert!(
-        wait_for(&|| checkpoint_written(&work), Duration::from_secs(120)),
-        "no checkpoint"
-    );
+    let child = solving(&slow, &work);
     unsafe {
         libc::kill(child.id() as libc::pid_t, libc::SIGTERM);
     }
@@ -443,20 +450,7 @@ fn a_sigterm_stops_the_solve_at_a_step_and_the_rerun_resumes_there() {
 
     // Twice: the second one is not waited on.
     ok(ribbar().args(["clean", "--all", "--work"]).arg(&work));
-    ok(ribbar().arg("mesh").args(slow).arg(&work));
-    let child = ribbar()
-        .arg("solve")
-        .args(slow)
-        .arg(&work)
-        .stdin(Stdio::null())
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .spawn()
-        .unwrap();
-    assert!(wait_for(
-        &|| checkpoint_written(&work),
-        Duration::from_secs(120)
-    ));
+    let child = solving(&slow, &work);
     unsafe {
         libc::kill(child.id() as libc::pid_t, libc::SIGTERM);
         libc::kill(child.id() as libc::pid_t, libc::SIGTERM);
