@@ -184,9 +184,9 @@ tutorial cancel
 [ -n "$job" ] || { echo "test-slurm: no solve job to cancel (it ended first?)" >&2; exit 1; }
 echo "test-slurm: cancelled solve job $job"
 wait "$snake" || { echo "test-slurm: the workflow failed after the cancel:" >&2; cat cluster/cluster-resume.snakemake.log >&2; exit 1; }
-# The job's log holds both attempts: the cancelled one stopped at a step with
+# The job's attempts log holds both: the cancelled one stopped at a step with
 # its checkpoint written (SIGTERM), the retry resumed from that step.
-log="cluster/cluster-resume/logs/solve/$case.log"
+log="cluster/cluster-resume/logs/solve/$case.attempts.log"
 stopped=$(sed -n 's/.*stopped by SIGTERM after step \([0-9]*\) .*/\1/p' "$log")
 resumed=$(sed -n 's/.*resuming after step \([0-9]*\) .*/\1/p' "$log")
 grep -E "stopped by SIGTERM|resuming after step" "$log"

@@ -6,6 +6,7 @@
 import csv
 import json
 import math
+import os
 import re
 import shlex
 import subprocess
@@ -27,15 +28,23 @@ CASE_PATTERN = "|".join(re.escape(case) for case in CASES)
 
 
 def run_logged(command, log):
-    """Runs a shell command with its output appended to the job's log: a
-    retry's log follows the failed attempt's (a solve killed at its time
-    limit, then resumed)."""
-    with open(log[0], "a") as out:
+    """Runs a shell command, its output in the job's log. Snakemake removes a
+    job's log before it runs the job again, so the output also goes to a
+    file beside it, <log>.attempts.log, that keeps every attempt's: a solve
+    killed at its time limit, then the retry that resumed it."""
+    attempts = re.sub(r"(\.log)?$", ".attempts.log", log[0], count=1)
+    start = os.path.getsize(attempts) if os.path.exists(attempts) else 0
+    with open(attempts, "a") as out:
         out.write(f"$ {command}\n")
-        out.flush()
+    try:
+        # ribbar writes to the file itself: no pipe for a signal to break.
         subprocess.run(
-            ["bash", "-c", command], stdout=out, stderr=subprocess.STDOUT, check=True
+            ["bash", "-c", f"{command} >> {shlex.quote(attempts)} 2>&1"], check=True
         )
+    finally:
+        with open(attempts) as every, open(log[0], "a") as out:
+            every.seek(start)
+            out.write(every.read())
 
 
 def stage_command(stage, case, threads):
