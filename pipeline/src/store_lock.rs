@@ -11,12 +11,14 @@
 //! belong to a process, not to a file descriptor: two threads of one
 //! process would both get one, and closing any descriptor of the file would
 //! drop it. So within a process a table of held paths serialises the
-//! threads first, and the file is opened only by the thread that holds its
-//! entry.
+//! threads first, the file is opened only by the thread that holds its
+//! entry, and it is read and written only through the descriptor that holds
+//! the lock.
 
 use std::collections::HashSet;
 use std::fs::File;
 use std::io::Write;
+use std::os::unix::fs::FileExt;
 use std::os::unix::io::AsRawFd;
 use std::path::{Path, PathBuf};
 use std::sync::{Condvar, Mutex};
@@ -111,12 +113,24 @@ impl FileLock {
     /// host (Lustre's `localflock`, NFS's `nolock`).
     pub fn verify(&self) -> Result<(), LockError> {
         let ours = format!("{} {}\n", hostname(), std::process::id());
-        match std::fs::read_to_string(&self.path) {
-            Ok(holder) if holder != ours => Err(LockError::Broken {
+        // Read through the descriptor that holds the lock: opening and
+        // closing another one of the same file would release it (POSIX).
+        let Some(file) = &self.file else {
+            return Ok(());
+        };
+        let mut buf = vec![0u8; 512];
+        let n = file.read_at(&mut buf, 0).map_err(|source| LockError::Io {
+            path: self.path.clone(),
+            source,
+        })?;
+        let holder = String::from_utf8_lossy(&buf[..n]);
+        if holder == ours {
+            Ok(())
+        } else {
+            Err(LockError::Broken {
                 path: self.path.clone(),
                 holder: holder.trim().to_string(),
-            }),
-            _ => Ok(()),
+            })
         }
     }
 }
