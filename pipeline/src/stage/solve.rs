@@ -208,6 +208,11 @@ impl Observer for StageObserver<'_> {
             t.solve
         ));
         if self.error.is_some() {
+            // Outputs failed before: no checkpoint is written any more, but
+            // a SIGTERM still ends the run here rather than at SIGKILL.
+            if crate::termination::requested() {
+                self.exit_terminated(r, Err(anyhow::anyhow!("an earlier output failed")));
+            }
             return;
         }
         let request = &self.ctx.scene.outputs.fields;
