@@ -21,3 +21,7 @@ PY=.tools/docs-long-venv/bin/python
 $PY -m pip install -q --disable-pip-version-check "pytest>=7"
 env -u GMSH RIBBAR_LONG_PAGES=1 RIBBAR_BIN_DIR="$PWD/target/debug" \
   xvfb-run -a -s "-screen 0 1920x1080x24" $PY -m pytest -q docs/tests/test_pages.py
+# A study under a real single-node Slurm (about 10 min with the installs
+# cached, more on a fresh machine: Debian's slurm-wlm, snakemake and its
+# Slurm plugin from PyPI).
+bash scripts/test-slurm.sh

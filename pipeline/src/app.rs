@@ -87,11 +87,14 @@ fn is_broken_pipe(err: &anyhow::Error) -> bool {
 
 fn dispatch(command: Command, printer: &Printer) -> Result<ExitCode> {
     match command {
-        Command::Geometry(a) => run_stages(&a, Stage::Geometry.up_to(), printer),
-        Command::Mesh(a) => run_stages(&a, Stage::Mesh.up_to(), printer),
-        Command::Solve(a) => run_stages(&a, Stage::Solve.up_to(), printer),
-        Command::Post(a) | Command::Run(a) => run_stages(&a, &Stage::ALL, printer),
+        Command::Geometry(a) => run_stages(&a, Stage::Geometry.up_to(), false, printer),
+        Command::Mesh(a) => run_stages(&a, Stage::Mesh.up_to(), false, printer),
+        Command::Solve(a) => run_stages(&a.scene, Stage::Solve.up_to(), a.allow_stopped, printer),
+        Command::Post(a) | Command::Run(a) => {
+            run_stages(&a.scene, &Stage::ALL, a.allow_stopped, printer)
+        }
         Command::Status(a) => status(&a),
+        Command::Estimate(a) => crate::commands::estimate(&a),
         Command::Clean(a) => crate::commands::clean(&a, printer),
         Command::Material(a) => crate::commands::material(&a),
         Command::Study(a) => crate::study_run::run(&a, printer),
@@ -101,9 +104,23 @@ fn dispatch(command: Command, printer: &Printer) -> Result<ExitCode> {
     }
 }
 
-fn run_stages(args: &SceneArgs, stages: &[Stage], printer: &Printer) -> Result<ExitCode> {
+/// Runs `stages` of the scene; a solve that stopped early is an error
+/// unless `allow_stopped`, where it is said and the exit is 0.
+fn run_stages(
+    args: &SceneArgs,
+    stages: &[Stage],
+    allow_stopped: bool,
+    printer: &Printer,
+) -> Result<ExitCode> {
     let scene = Scene::load(&args.spec, &args.overrides)?;
-    crate::commands::run_scene(&scene, &args.work, stages, printer)?;
+    match crate::commands::run_scene_stages(&scene, &args.work, stages, printer)? {
+        None => {}
+        Some(stopped) if allow_stopped => {
+            // Said even under -q: the exit status no longer tells.
+            eprintln!("stopped: {stopped} (exit 0: --allow-stopped)");
+        }
+        Some(stopped) => anyhow::bail!(stopped),
+    }
     Ok(ExitCode::SUCCESS)
 }
 

@@ -36,6 +36,19 @@ pub struct SceneArgs {
     pub overrides: Vec<String>,
 }
 
+/// Options of the commands that run the solve.
+#[derive(Debug, Args, Clone)]
+pub struct RunArgs {
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    /// Exit 0 when the solve stops before the end of the loading (a stall,
+    /// the step limit): its converged steps are published as its result and
+    /// solve.json records `"completed": false` and why. For workflow
+    /// engines, which would otherwise delete the outputs of a failed job.
+    #[arg(long)]
+    pub allow_stopped: bool,
+}
+
 #[derive(Debug, Subcommand)]
 pub enum Command {
     /// Write the bar and specimen solid's OpenCASCADE script and its measures: specimen.geo and geometry.json.
@@ -43,13 +56,15 @@ pub enum Command {
     /// Build the solid in gmsh, check it against the geometry, mesh it and build the model with interface elements.
     Mesh(SceneArgs),
     /// Solve the pull-out: curve.csv, solve summary, fields.
-    Solve(SceneArgs),
+    Solve(RunArgs),
     /// Plots, summary.json and fields from the solve.
-    Post(SceneArgs),
+    Post(RunArgs),
     /// Run every stale stage in order.
-    Run(SceneArgs),
+    Run(RunArgs),
     /// Show for each stage: up to date, stale (and which keys changed), or missing.
     Status(SceneArgs),
+    /// What the scene's solve will take (memory, run time), from its mesh: JSON.
+    Estimate(EstimateArgs),
     /// Remove the scene's results (and, with --all, the whole store).
     Clean(CleanArgs),
     /// Drive one material point along a loading path (like MFront's mtest).
@@ -111,6 +126,15 @@ pub struct BenchArgs {
     /// 1.6, 1.2, 0.8, 0.4).
     #[arg(long = "sizes", value_name = "SERIES=MM,MM,...")]
     pub sizes: Vec<String>,
+}
+
+#[derive(Debug, Args)]
+pub struct EstimateArgs {
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    /// Write the JSON to this file (atomically) instead of standard output.
+    #[arg(short, long)]
+    pub output: Option<PathBuf>,
 }
 
 #[derive(Debug, Args)]
@@ -178,4 +202,11 @@ pub struct StudyArgs {
     /// Write a workflow for an external engine instead of running.
     #[arg(long, value_enum)]
     pub export: Option<ExportFormat>,
+    /// Where --export writes the workflow (default: WORK/<study>/snakemake).
+    #[arg(long, value_name = "DIR", requires = "export")]
+    pub export_dir: Option<PathBuf>,
+    /// Run no case: only tabulate and plot the cases' published results
+    /// (what an exported workflow's last step does).
+    #[arg(long, conflicts_with = "export")]
+    pub collect: bool,
 }

@@ -1,6 +1,8 @@
 //! Command bodies shared by the binary and the study runner.
 
-use crate::cli::{CleanArgs, CompareArgs, CompareAxis, MaterialArgs, SchemaArgs, SchemaKind};
+use crate::cli::{
+    CleanArgs, CompareArgs, CompareAxis, EstimateArgs, MaterialArgs, SchemaArgs, SchemaKind,
+};
 use crate::progress::Printer;
 use crate::scene::Scene;
 use crate::stage::{Ctx, Keys, Stage};
@@ -10,8 +12,24 @@ use std::io::Write;
 use std::path::Path;
 use std::process::ExitCode;
 
-/// Runs `stages` (in order, each only if stale) for one scene.
+/// Runs `stages` (in order, each only if stale) for one scene; a solve
+/// that stopped before the end of the loading is an error.
 pub fn run_scene(scene: &Scene, work: &Path, stages: &[Stage], printer: &Printer) -> Result<()> {
+    match run_scene_stages(scene, work, stages, printer)? {
+        None => Ok(()),
+        Some(stopped) => Err(anyhow::anyhow!(stopped)),
+    }
+}
+
+/// Runs `stages` (in order, each only if stale) for one scene; when the
+/// solve stopped before the end of the loading, says so (the converged
+/// steps are published like a whole curve).
+pub fn run_scene_stages(
+    scene: &Scene,
+    work: &Path,
+    stages: &[Stage],
+    printer: &Printer,
+) -> Result<Option<String>> {
     let gmsh = geom::gmsh::Gmsh::locate()?;
     let keys = Keys::of(scene, gmsh.version());
     let store = Store::new(work);
@@ -30,15 +48,15 @@ pub fn run_scene(scene: &Scene, work: &Path, stages: &[Stage], printer: &Printer
     printer.line(&format!("results: {}", dir.display()));
     if stages.contains(&Stage::Solve) {
         if let Some(why) = incomplete_solve(&dir.join("solve.json")) {
-            anyhow::bail!(
+            return Ok(Some(format!(
                 "the solve of {} stopped before the end of the loading: {why}; \
                  the converged steps are kept in {}",
                 scene.name,
                 dir.join("curve.csv").display()
-            );
+            )));
         }
     }
-    Ok(())
+    Ok(None)
 }
 
 /// The reason recorded by a solve that stopped early, if it did.
@@ -49,6 +67,33 @@ pub fn incomplete_solve(solve_json: &Path) -> Option<String> {
     } else {
         Some(v.get("stopped")?.as_str().unwrap_or("unknown").to_string())
     }
+}
+
+/// `ribbar estimate`: the solve's estimate from the scene's meshed model
+/// (the mesh stage of exactly these inputs must be done).
+pub fn estimate(args: &EstimateArgs) -> Result<ExitCode> {
+    let a = &args.scene;
+    let scene = Scene::load(&a.spec, &a.overrides)?;
+    let gmsh = geom::gmsh::Gmsh::locate().context("estimate needs gmsh's version for the keys")?;
+    let keys = Keys::of(&scene, gmsh.version());
+    let store = Store::new(&a.work);
+    let key = keys.get(Stage::Mesh);
+    if !store.is_done(key) {
+        anyhow::bail!(
+            "estimate: the mesh of {} is not in {} yet; run `ribbar mesh` with the same spec and --set first",
+            scene.name,
+            a.work.display()
+        );
+    }
+    let nodes = crate::estimate::mesh_nodes(&store.artifact_dir(key).join("mesh.json"))?;
+    let estimate = crate::estimate::SolveEstimate::new(&scene, nodes);
+    let mut json = serde_json::to_vec_pretty(&estimate)?;
+    json.push(b'\n');
+    match &args.output {
+        Some(path) => crate::store::write_atomic(path, &json)?,
+        None => std::io::stdout().lock().write_all(&json)?,
+    }
+    Ok(ExitCode::SUCCESS)
 }
 
 /// Removes a scene's published results; with `--all`, the whole store.

@@ -36,6 +36,8 @@ pub enum StoreError {
     },
     #[error("{path}: corrupt store record ({reason}); remove it or run `ribbar clean`")]
     Corrupt { path: PathBuf, reason: String },
+    #[error(transparent)]
+    Lock(#[from] crate::store_lock::LockError),
 }
 
 fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> StoreError + '_ {
@@ -131,9 +133,19 @@ pub struct Store {
     pub work: PathBuf,
 }
 
-/// An exclusive lock on one stage key, released on drop.
+/// An exclusive lock on one stage key, held by one thread of one process
+/// on any host that shares the work directory; released on drop
+/// (`crate::store_lock`).
 pub struct KeyLock {
-    _file: File,
+    lock: crate::store_lock::FileLock,
+}
+
+impl KeyLock {
+    /// `Err` when another process took this lock while it was held (a file
+    /// system whose locks do not hold across hosts).
+    pub fn verify(&self) -> Result<(), StoreError> {
+        Ok(self.lock.verify()?)
+    }
 }
 
 impl Store {
@@ -173,19 +185,17 @@ impl Store {
         self.artifact_dir(key).join("stage.json").is_file()
     }
 
-    /// Blocks until no other process works on this key.
+    /// Blocks until no other thread, process or host works on this key.
     pub fn lock(&self, key: &StageKey) -> Result<KeyLock, StoreError> {
         let root = self.stage_root(&key.stage);
         fs::create_dir_all(&root).map_err(io_err(&root))?;
         let path = root.join(format!("{}.lock", key.key));
-        let file = File::options()
-            .create(true)
-            .truncate(false)
-            .write(true)
-            .open(&path)
-            .map_err(io_err(&path))?;
-        file.lock().map_err(io_err(&path))?;
-        Ok(KeyLock { _file: file })
+        let lock = crate::store_lock::lock_exclusive(&path)?;
+        // On NFS a name looked up before the lock may be cached: opening the
+        // directory revalidates it (close-to-open), so the `is_done` that
+        // follows sees a commit another host made while this one waited.
+        let _ = File::open(&root);
+        Ok(KeyLock { lock })
     }
 
     /// A fresh (emptied) in-progress directory for `key`. With `keep`, an

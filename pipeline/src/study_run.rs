@@ -14,12 +14,7 @@ use std::process::{Command, ExitCode, Stdio};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Condvar, Mutex};
 
-/// Memory a solve is expected to take, bytes: the Cholesky factor dominates
-/// and grows like DOFs^(4/3) under nested dissection (3.5 GB measured at
-/// 285 k DOFs, SPEC §9).
-pub fn estimated_solve_bytes(dofs: f64) -> f64 {
-    3.5e9 * (dofs / 285e3).powf(4.0 / 3.0) + 200e6
-}
+use crate::estimate::estimated_solve_bytes;
 
 fn case_args(study: &Study, case: &Case, work: &Path, command: &str) -> Vec<String> {
     let mut args = vec![
@@ -115,14 +110,29 @@ pub fn run(args: &StudyArgs, printer: &Printer) -> Result<ExitCode> {
     let out = args.work.join(&study.name);
     std::fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
     if let Some(crate::cli::ExportFormat::Snakemake) = args.export {
-        let path = out.join("Snakefile");
-        crate::store::write_atomic(&path, snakefile(&study, args)?.as_bytes())?;
+        let dir = args
+            .export_dir
+            .clone()
+            .unwrap_or_else(|| out.join("snakemake"));
+        let ribbar = crate::child::self_exe()?;
+        let ribbar = std::path::absolute(&ribbar).unwrap_or(ribbar);
+        let done = crate::export::export_snakemake(&study, &args.study, &args.work, &ribbar, &dir)?;
         printer.line(&format!(
-            "wrote {} ({} cases); run it with: snakemake -s {} --cores N",
-            path.display(),
-            study.cases.len(),
-            path.display()
+            "wrote the workflow of {} cases to {}; run it there with `snakemake --cores N`, \
+             or `snakemake --executor slurm --profile profiles/slurm` on a Slurm cluster",
+            done.cases,
+            done.dir.display()
         ));
+        return Ok(ExitCode::SUCCESS);
+    }
+    if args.collect {
+        collect(&study, &args.work, &out, printer)?;
+        for case in &study.cases {
+            let solve_json = args.work.join(&case.name).join("solve.json");
+            if let Some(why) = crate::commands::incomplete_solve(&solve_json) {
+                printer.line(&format!("[{}] stopped early: {why}", case.name));
+            }
+        }
         return Ok(ExitCode::SUCCESS);
     }
     let exe = crate::child::self_exe()?;
@@ -398,85 +408,6 @@ fn curve_distance_table(curves: &[(f64, &[CurveRow])]) -> post::Table {
             .to_vec(),
         rows,
     }
-}
-
-/// A Snakefile whose rules call the same stage subcommands on the same work
-/// layout: one rule per stage and case, then the study's own collection.
-pub fn snakefile(study: &Study, args: &StudyArgs) -> Result<String> {
-    let exe = crate::child::self_exe()?;
-    let q = |s: &str| format!("{s:?}");
-    let mut text = String::new();
-    text.push_str(&format!(
-        "# Study {} ({} cases), exported by `ribbar study --export snakemake`.\n\
-         # Each rule runs one ribbar stage of one case; ribbar's own store makes\n\
-         # shared upstream stages cheap. Run: snakemake -s <this file> --cores N\n\
-         # On a cluster: add --executor slurm (or kubernetes) as usual.\n\n",
-        study.name,
-        study.cases.len()
-    ));
-    let work = std::path::absolute(&args.work).unwrap_or_else(|_| args.work.clone());
-    let base = std::path::absolute(&study.base).unwrap_or_else(|_| study.base.clone());
-    let study_file = std::path::absolute(&args.study).unwrap_or_else(|_| args.study.clone());
-    text.push_str(&format!(
-        "RIBBAR = {}\nWORK = {}\nBASE = {}\n\n",
-        q(&exe.display().to_string()),
-        q(&work.display().to_string()),
-        q(&base.display().to_string())
-    ));
-    let outs: Vec<String> = study
-        .cases
-        .iter()
-        .map(|c| {
-            format!(
-                "    {},\n",
-                q(&format!("{}/{}/summary.json", work.display(), c.name))
-            )
-        })
-        .collect();
-    text.push_str(&format!(
-        "rule all:\n    input:\n        {},\n\n",
-        q(&format!("{}/{}/table.csv", work.display(), study.name))
-    ));
-    text.push_str(&format!(
-        "rule study:\n    input:\n{}    output:\n        {},\n    shell:\n        \"{{RIBBAR}} study {} --work {{WORK}} -q\"\n\n",
-        outs.iter().map(|o| format!("    {o}")).collect::<String>(),
-        q(&format!("{}/{}/table.csv", work.display(), study.name)),
-        shell_quote(&study_file.display().to_string()),
-    ));
-    let stage_out = [
-        ("geometry", "geometry.json"),
-        ("mesh", "mesh.json"),
-        ("solve", "curve.csv"),
-        ("post", "summary.json"),
-    ];
-    for case in &study.cases {
-        let sets: String = case
-            .overrides
-            .iter()
-            .map(|o| format!(" --set {}", shell_quote(o)))
-            .collect();
-        let rule_name = case.name.replace(['-', '.'], "_");
-        for (i, (stage, file)) in stage_out.iter().enumerate() {
-            text.push_str(&format!("rule {rule_name}_{stage}:\n"));
-            if i > 0 {
-                let prev_file = stage_out[i - 1].1;
-                text.push_str(&format!(
-                    "    input:\n        {},\n",
-                    q(&format!("{}/{}/{}", work.display(), case.name, prev_file))
-                ));
-            }
-            text.push_str(&format!(
-                "    output:\n        {},\n    shell:\n        \"{{RIBBAR}} {stage} {{BASE}} --work {{WORK}} -q{}\"\n\n",
-                q(&format!("{}/{}/{}", work.display(), case.name, file)),
-                sets.replace('"', "\\\"")
-            ));
-        }
-    }
-    Ok(text)
-}
-
-fn shell_quote(s: &str) -> String {
-    format!("'{}'", s.replace('\'', "'\\''"))
 }
 
 #[cfg(test)]

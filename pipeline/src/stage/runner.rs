@@ -15,7 +15,7 @@ pub fn ensure(ctx: &Ctx, stage: Stage) -> Result<bool> {
     let ran = if ctx.store.is_done(key) {
         false
     } else {
-        let _lock = ctx.store.lock(key)?;
+        let lock = ctx.store.lock(key)?;
         if ctx.store.is_done(key) {
             false
         } else {
@@ -24,6 +24,7 @@ pub fn ensure(ctx: &Ctx, stage: Stage) -> Result<bool> {
             run_stage(ctx, stage, &partial)
                 .with_context(|| format!("stage {stage} of scene {}", ctx.scene.name))?;
             let seconds = started.elapsed().as_secs_f64();
+            lock.verify()?;
             ctx.store.commit(key, &partial, seconds)?;
             ctx.printer
                 .line(&format!("{stage}: done in {seconds:.1} s"));

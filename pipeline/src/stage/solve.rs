@@ -140,6 +140,33 @@ impl StageObserver<'_> {
         Ok(())
     }
 
+    /// Ends the process after a SIGTERM (`crate::termination`), the
+    /// checkpoint of step `row` written (`saved`): nothing is committed, so
+    /// a rerun resumes from this step.
+    fn exit_terminated(&self, row: &CurveRow, saved: Result<()>) -> ! {
+        self.ctx.printer.finish();
+        let checkpoint = self.checkpoint_path.display();
+        match saved {
+            Ok(()) => eprintln!(
+                "{}solve of {} stopped by SIGTERM after step {} (u = {:.4} mm); its checkpoint \
+                 {checkpoint} resumes it on the next run",
+                crate::child::ERROR_PREFIX,
+                self.ctx.scene.name,
+                row.step,
+                row.u_imposed * 1e3
+            ),
+            Err(e) => eprintln!(
+                "{}solve of {} stopped by SIGTERM after step {}; writing its checkpoint \
+                 {checkpoint} failed ({e:#}), the next run resumes from an earlier one or \
+                 starts over",
+                crate::child::ERROR_PREFIX,
+                self.ctx.scene.name,
+                row.step
+            ),
+        }
+        std::process::exit(crate::termination::TERMINATED_EXIT)
+    }
+
     /// Writes the kept peak state's fields, if one is waiting.
     fn write_pending_peak(&mut self, model: &Model) -> Result<()> {
         match self.pending_peak.take() {
@@ -181,6 +208,11 @@ impl Observer for StageObserver<'_> {
             t.solve
         ));
         if self.error.is_some() {
+            // Outputs failed before: no checkpoint is written any more, but
+            // a SIGTERM still ends the run here rather than at SIGKILL.
+            if crate::termination::requested() {
+                self.exit_terminated(r, Err(anyhow::anyhow!("an earlier output failed")));
+            }
             return;
         }
         let request = &self.ctx.scene.outputs.fields;
@@ -197,10 +229,15 @@ impl Observer for StageObserver<'_> {
             self.peak = r.bond_stress;
             PeakState::keep(&mut self.pending_peak, *r, state);
         }
+        let terminated = crate::termination::requested();
         if result.is_ok()
-            && self.last_checkpoint.elapsed() >= self.checkpoint_cost * CHECKPOINT_COST_RATIO
+            && (terminated
+                || self.last_checkpoint.elapsed() >= self.checkpoint_cost * CHECKPOINT_COST_RATIO)
         {
             result = self.save_checkpoint(view.model, view.checkpoint);
+        }
+        if terminated {
+            self.exit_terminated(r, result);
         }
         if let Err(e) = result {
             self.error = Some(e);
@@ -329,6 +366,8 @@ pub fn run(ctx: &Ctx, out: &Path) -> Result<()> {
         error: None,
         cutbacks: Vec::new(),
     };
+    // A scheduler's SIGTERM stops the solve at its next converged step.
+    let sigterm = crate::termination::catch_sigterm();
     let outcome = solve::problems::pullout::solve_pullout(
         &model,
         &laws,
@@ -337,6 +376,7 @@ pub fn run(ctx: &Ctx, out: &Path) -> Result<()> {
         checkpoint,
         &mut observer,
     );
+    drop(sigterm);
     ctx.printer.finish();
     if let Some(e) = observer.error.take() {
         return Err(e.context("writing solve outputs"));
