@@ -3,11 +3,16 @@
 //! Layout:
 //! ```text
 //! WORK/.store/<stage>/<key>/           finished artifacts of one stage run
-//! WORK/.store/<stage>/<key>/stage.json what was hashed (the key's inputs)
+//! WORK/.store/<stage>/<key>/stage.json what was hashed, and each file's
+//!                                      size, time and SHA-256
 //! WORK/.store/<stage>/<key>.partial/   a run in progress (never read as done)
 //! WORK/.store/<stage>/<key>.lock       held while a process works on <key>
-//! WORK/<scene>/                        the scene's latest results, by name
-//! WORK/<scene>/.ribbar-stages.json     which key each stage last published
+//! WORK/.store/quarantine/              folders and checkpoints that failed
+//!                                      their checks, moved aside
+//! WORK/<scene>/                        copies of the scene's latest results
+//! WORK/<scene>/.ribbar-stages.json     which key each stage last published,
+//!                                      each published file's record, and
+//!                                      how the last run ended
 //! ```
 //! A key is the SHA-256 of the canonical JSON of exactly what the stage reads
 //! (resolved spec sections, upstream keys, versions that change results);
@@ -15,16 +20,47 @@
 //! by one `rename` after `stage.json` is written, so an interrupted stage is
 //! never taken as done. Two processes that need the same key serialise on its
 //! lock file; the second then finds it done.
+//!
+//! "Finished" has one definition, [`Store::examine`], used by lookup and by
+//! commit alike: the folder has a `stage.json` of its own key listing every
+//! file with its size and digest, and every file listed is there, a regular
+//! file of that size (and that digest, where checked). A folder that fails
+//! it is moved to the quarantine and the stage recomputed. Artifacts are
+//! read-only and published as copies, so that editing a published file
+//! never changes what the store serves.
 
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
-use sha2::{Digest, Sha256};
+use sha2::{Digest as _, Sha256};
 use std::collections::BTreeMap;
 use std::fs::{self, File};
 use std::path::{Path, PathBuf};
 
-/// Bumped when the store layout changes; part of every key.
-pub const STORE_FORMAT: u32 = 1;
+mod digest;
+mod publish;
+mod record;
+
+pub use digest::{check_cost, sha256_file, Depth, FileDigest};
+pub use publish::{edited_name, publish_cost, FileState, Published};
+pub use record::{
+    unix_now, utc_text, PublishedFile, PublishedStage, RunOutcome, RunRecord, SceneRecord,
+    RECORD_FILE,
+};
+
+/// Bumped when the store layout changes; part of every key. Format 2: each
+/// artifact's digests in `stage.json`, copies in the results folders.
+pub const STORE_FORMAT: u32 = 2;
+
+/// Where folders and files that failed their checks are moved.
+pub const QUARANTINE: &str = "quarantine";
+/// A stage's folder of recorded artifacts: the record itself.
+pub const STAGE_FILE: &str = "stage.json";
+/// Below this many bytes a stage's files are always checked by digest.
+const ALWAYS_DIGEST_BYTES: u64 = 1 << 20;
+/// Beyond that, by digest when hashing them costs under about 1 % of the
+/// stage's own time: bytes per second of the stage's recorded wall time
+/// (1 % of 300 MB/s, a SHA-256 rate without hardware help).
+const DIGEST_BYTES_PER_STAGE_SECOND: f64 = 3e6;
 
 #[derive(Debug, thiserror::Error)]
 pub enum StoreError {
@@ -36,9 +72,14 @@ pub enum StoreError {
     },
     #[error("{path}: corrupt store record ({reason}); remove it or run `ribbar clean`")]
     Corrupt { path: PathBuf, reason: String },
+    #[error(
+        "{path} exists and was not made by ribbar (it has no {RECORD_FILE}): ribbar would mix \
+         its results with the files there; move them away or choose another --work"
+    )]
+    NotOurs { path: PathBuf },
 }
 
-fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> StoreError + '_ {
+pub(crate) fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> StoreError + '_ {
     move |source| StoreError::Io {
         path: path.to_path_buf(),
         source,
@@ -124,8 +165,54 @@ pub fn changed_keys(old: &Value, new: &Value) -> Vec<String> {
     keys
 }
 
-/// The scene's record of what each stage last published.
-pub type SceneRecord = BTreeMap<String, StageKey>;
+/// A stage's `stage.json`: its key and what was hashed, the run's wall
+/// time, and the record of every file it made.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct StageRecord {
+    #[serde(flatten)]
+    pub key: StageKey,
+    /// Every artifact file, by its path relative to the folder.
+    pub files: BTreeMap<String, FileDigest>,
+}
+
+impl StageRecord {
+    /// Total size of the recorded files, bytes.
+    pub fn bytes(&self) -> u64 {
+        self.files.values().map(|f| f.size).sum()
+    }
+
+    /// How a lookup checks this record's folder: by digest when that is
+    /// cheap against what the stage cost to make, by sizes otherwise.
+    pub fn lookup_depth(&self) -> Depth {
+        let bytes = self.bytes();
+        let budget = self.key.wall_time_s.unwrap_or(0.0) * DIGEST_BYTES_PER_STAGE_SECOND;
+        if bytes <= ALWAYS_DIGEST_BYTES || (bytes as f64) <= budget {
+            Depth::Digests
+        } else {
+            Depth::Sizes
+        }
+    }
+}
+
+/// What [`Store::examine`] found under a key.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Examined {
+    /// Nothing under the key.
+    Absent,
+    /// A finished folder: its record agrees with its files.
+    Finished(StageRecord),
+    /// Something under the key that is not finished: why, naming the file.
+    Damaged(String),
+}
+
+/// How thoroughly [`Store::examine`] checks a folder's files.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Thoroughness {
+    /// The record's own choice ([`StageRecord::lookup_depth`]).
+    Lookup,
+    /// Every file's digest (`ribbar verify`, commit).
+    Full,
+}
 
 pub struct Store {
     pub work: PathBuf,
@@ -146,7 +233,7 @@ impl Store {
         }
     }
 
-    fn stage_root(&self, stage: &str) -> PathBuf {
+    pub fn stage_root(&self, stage: &str) -> PathBuf {
         self.work.join(".store").join(stage)
     }
 
@@ -163,14 +250,50 @@ impl Store {
         self.work.join(scene)
     }
 
-    /// Wall time recorded when `key`'s artifacts were produced, s.
-    pub fn wall_time(&self, key: &StageKey) -> Option<f64> {
-        let bytes = fs::read(self.artifact_dir(key).join("stage.json")).ok()?;
-        serde_json::from_slice::<StageKey>(&bytes).ok()?.wall_time_s
+    pub fn quarantine_dir(&self) -> PathBuf {
+        self.work.join(".store").join(QUARANTINE)
     }
 
+    /// Wall time recorded when `key`'s artifacts were produced, s.
+    pub fn wall_time(&self, key: &StageKey) -> Option<f64> {
+        let bytes = fs::read(self.artifact_dir(key).join(STAGE_FILE)).ok()?;
+        serde_json::from_slice::<StageRecord>(&bytes)
+            .ok()?
+            .key
+            .wall_time_s
+    }
+
+    /// Whether `key` is finished (checked as a lookup checks it).
     pub fn is_done(&self, key: &StageKey) -> bool {
-        self.artifact_dir(key).join("stage.json").is_file()
+        matches!(
+            self.examine(key, Thoroughness::Lookup),
+            Examined::Finished(_)
+        )
+    }
+
+    /// The one definition of a finished stage folder (module doc).
+    pub fn examine(&self, key: &StageKey, thoroughness: Thoroughness) -> Examined {
+        self.examine_key(&key.stage, &key.key, thoroughness)
+    }
+
+    /// [`Store::examine`] of `stage`'s folder `key`.
+    pub fn examine_key(&self, stage: &str, key: &str, thoroughness: Thoroughness) -> Examined {
+        let dir = self.stage_root(stage).join(key);
+        examine_dir(&dir, stage, key, thoroughness)
+    }
+
+    /// Moves `path` (a folder or a file of the store) into the quarantine
+    /// as `<label>-<n>`; returns where it went.
+    pub fn quarantine(&self, path: &Path, label: &str) -> Result<PathBuf, StoreError> {
+        let root = self.quarantine_dir();
+        fs::create_dir_all(&root).map_err(io_err(&root))?;
+        let target = (1..)
+            .map(|n| root.join(format!("{label}-{n}")))
+            .find(|p| fs::symlink_metadata(p).is_err())
+            .expect("an unused name");
+        fs::rename(path, &target).map_err(io_err(path))?;
+        sync_dir(&root);
+        Ok(target)
     }
 
     /// Blocks until no other process works on this key.
@@ -188,6 +311,30 @@ impl Store {
         Ok(KeyLock { _file: file })
     }
 
+    /// The lock on `stage`'s `key` if no other process holds it (`None`
+    /// if one does).
+    pub fn try_lock(&self, stage: &str, key: &str) -> Result<Option<KeyLock>, StoreError> {
+        let root = self.stage_root(stage);
+        fs::create_dir_all(&root).map_err(io_err(&root))?;
+        let path = root.join(format!("{key}.lock"));
+        let file = File::options()
+            .create(true)
+            .truncate(false)
+            .write(true)
+            .open(&path)
+            .map_err(io_err(&path))?;
+        match file.try_lock() {
+            Ok(()) => Ok(Some(KeyLock { _file: file })),
+            Err(fs::TryLockError::WouldBlock) => Ok(None),
+            Err(fs::TryLockError::Error(e)) => Err(io_err(&path)(e)),
+        }
+    }
+
+    /// The in-progress directory of `stage`'s `key`.
+    pub fn partial_dir_of(&self, stage: &str, key: &str) -> PathBuf {
+        self.stage_root(stage).join(format!("{key}.partial"))
+    }
+
     /// A fresh (emptied) in-progress directory for `key`. With `keep`, an
     /// existing one is reused (resumable stages keep their checkpoint there).
     pub fn begin(&self, key: &StageKey, keep: bool) -> Result<PathBuf, StoreError> {
@@ -199,121 +346,109 @@ impl Store {
         Ok(dir)
     }
 
-    /// Marks the in-progress directory done: writes `stage.json` and renames
-    /// the directory to its key in one step.
+    /// Marks the in-progress directory done: records every file (size,
+    /// time, digest), makes them read-only, writes `stage.json` and renames
+    /// the directory to its key in one step. A folder already under the key
+    /// is kept when it is finished (a concurrent process made the same
+    /// result) and moved to the quarantine when it is not.
     pub fn commit(
         &self,
         key: &StageKey,
         partial: &Path,
         wall_time_s: f64,
-    ) -> Result<PathBuf, StoreError> {
-        let record = StageKey {
-            wall_time_s: Some(wall_time_s),
-            ..key.clone()
+    ) -> Result<Committed, StoreError> {
+        let files = digest::seal(partial, &[STAGE_FILE])?;
+        let record = StageRecord {
+            key: StageKey {
+                wall_time_s: Some(wall_time_s),
+                ..key.clone()
+            },
+            files,
         };
+        let stage_json = partial.join(STAGE_FILE);
         write_atomic(
-            &partial.join("stage.json"),
+            &stage_json,
             &serde_json::to_vec_pretty(&record).expect("serialisable"),
         )?;
+        digest::make_read_only(&stage_json)?;
         let done = self.artifact_dir(key);
-        if done.exists() {
-            // A concurrent process finished the same key first; ours is identical.
-            fs::remove_dir_all(partial).map_err(io_err(partial))?;
-        } else {
-            fs::rename(partial, &done).map_err(io_err(&done))?;
-        }
-        sync_dir(&self.stage_root(&key.stage));
-        Ok(done)
-    }
-
-    pub fn read_record(&self, scene: &str) -> Result<SceneRecord, StoreError> {
-        let path = self.scene_dir(scene).join(".ribbar-stages.json");
-        match fs::read(&path) {
-            Ok(bytes) => serde_json::from_slice(&bytes).map_err(|e| StoreError::Corrupt {
-                path: path.clone(),
-                reason: e.to_string(),
-            }),
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(SceneRecord::new()),
-            Err(e) => Err(StoreError::Io { path, source: e }),
-        }
-    }
-
-    /// Makes `files` (relative paths inside the artifact directory) visible
-    /// under `WORK/<scene>/` and records the key. Each file is replaced
-    /// atomically; directories are mirrored.
-    pub fn publish(&self, scene: &str, key: &StageKey, files: &[&str]) -> Result<(), StoreError> {
-        let src_root = self.artifact_dir(key);
-        let dst_root = self.scene_dir(scene);
-        fs::create_dir_all(&dst_root).map_err(io_err(&dst_root))?;
-        for rel in files {
-            let src = src_root.join(rel);
-            if src.is_dir() {
-                let dst = dst_root.join(rel);
-                if dst.exists() {
-                    fs::remove_dir_all(&dst).map_err(io_err(&dst))?;
-                }
-                copy_tree(&src, &dst)?;
-            } else if src.is_file() {
-                link_or_copy_atomic(&src, &dst_root.join(rel))?;
+        let mut replaced = None;
+        match self.examine(key, Thoroughness::Full) {
+            Examined::Finished(theirs) => {
+                fs::remove_dir_all(partial).map_err(io_err(partial))?;
+                return Ok(Committed {
+                    record: theirs,
+                    replaced,
+                });
             }
+            Examined::Damaged(why) => {
+                let to = self.quarantine(&done, &format!("{}-{}", key.stage, key.key))?;
+                replaced = Some((why, to));
+            }
+            Examined::Absent => {}
         }
-        let mut record = self.read_record(scene).unwrap_or_default();
-        record.insert(key.stage.clone(), key.clone());
-        write_atomic(
-            &dst_root.join(".ribbar-stages.json"),
-            &serde_json::to_vec_pretty(&record).expect("serialisable"),
-        )
+        fs::rename(partial, &done).map_err(io_err(&done))?;
+        sync_dir(&self.stage_root(&key.stage));
+        Ok(Committed { record, replaced })
     }
 }
 
-fn copy_tree(src: &Path, dst: &Path) -> Result<(), StoreError> {
-    fs::create_dir_all(dst).map_err(io_err(dst))?;
-    for entry in fs::read_dir(src).map_err(io_err(src))? {
-        let entry = entry.map_err(io_err(src))?;
-        let path = entry.path();
-        let target = dst.join(entry.file_name());
-        if path.is_dir() {
-            copy_tree(&path, &target)?;
-        } else {
-            link_or_copy_atomic(&path, &target)?;
+/// What [`Store::commit`] did.
+#[derive(Debug)]
+pub struct Committed {
+    /// The record now under the key.
+    pub record: StageRecord,
+    /// A folder found under the key that was not finished: why, and where
+    /// it was moved.
+    pub replaced: Option<(String, PathBuf)>,
+}
+
+/// [`Store::examine`] of the folder `dir` expected to hold `key`.
+fn examine_dir(dir: &Path, stage: &str, key: &str, thoroughness: Thoroughness) -> Examined {
+    match fs::symlink_metadata(dir) {
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Examined::Absent,
+        Err(e) => return Examined::Damaged(format!("{}: {e}", dir.display())),
+        Ok(m) if !m.is_dir() => {
+            return Examined::Damaged(format!("{}: not a directory", dir.display()))
         }
+        Ok(_) => {}
     }
-    Ok(())
-}
-
-/// Hard-links (same file system, no copy of large meshes) or copies `src`
-/// to a temporary name beside `dst`, then renames it over `dst`.
-fn link_or_copy_atomic(src: &Path, dst: &Path) -> Result<(), StoreError> {
-    if let Some(parent) = dst.parent() {
-        fs::create_dir_all(parent).map_err(io_err(parent))?;
+    let stage_json = dir.join(STAGE_FILE);
+    let bytes = match fs::read(&stage_json) {
+        Ok(b) => b,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            return Examined::Damaged(format!(
+                "{}: missing (the folder was never finished, or was partly removed)",
+                stage_json.display()
+            ))
+        }
+        Err(e) => return Examined::Damaged(format!("{}: {e}", stage_json.display())),
+    };
+    let record: StageRecord = match serde_json::from_slice(&bytes) {
+        Ok(r) => r,
+        Err(e) => {
+            return Examined::Damaged(format!(
+                "{}: not a record of this ribbar ({e})",
+                stage_json.display()
+            ))
+        }
+    };
+    if record.key.stage != stage || record.key.key != key {
+        return Examined::Damaged(format!(
+            "{}: the record of {} {}, not of this key",
+            stage_json.display(),
+            record.key.stage,
+            record.key.key
+        ));
     }
-    if same_file(src, dst) {
-        return Ok(());
+    let depth = match thoroughness {
+        Thoroughness::Lookup => record.lookup_depth(),
+        Thoroughness::Full => Depth::Digests,
+    };
+    match digest::first_difference(dir, &record.files, depth) {
+        Some(why) => Examined::Damaged(why),
+        None => Examined::Finished(record),
     }
-    let tmp = geom::fsutil::temp_sibling(dst);
-    let _ = fs::remove_file(&tmp);
-    if fs::hard_link(src, &tmp).is_err() {
-        fs::copy(src, &tmp).map_err(io_err(&tmp))?;
-    }
-    let renamed = fs::rename(&tmp, dst).map_err(io_err(dst));
-    // rename() between two links of one file succeeds without removing the
-    // source name (POSIX), which a concurrent publish can make happen.
-    let _ = fs::remove_file(&tmp);
-    renamed
-}
-
-#[cfg(unix)]
-fn same_file(a: &Path, b: &Path) -> bool {
-    use std::os::unix::fs::MetadataExt;
-    match (fs::metadata(a), fs::metadata(b)) {
-        (Ok(x), Ok(y)) => x.dev() == y.dev() && x.ino() == y.ino(),
-        _ => false,
-    }
-}
-
-#[cfg(not(unix))]
-fn same_file(_: &Path, _: &Path) -> bool {
-    false
 }
 
 /// Writes a file so that readers see either the old or the whole new content.
@@ -355,21 +490,120 @@ mod tests {
         );
     }
 
+    fn scratch(name: &str) -> PathBuf {
+        let work = std::env::temp_dir().join(format!("ribbar-store-{name}-{}", std::process::id()));
+        let _ = fs::remove_dir_all(&work);
+        work
+    }
+
+    /// A partial stage is never done; a committed one is, with its files
+    /// recorded and read-only, and the published copy is not the stored file.
     #[test]
     fn a_partial_stage_is_never_done_and_commit_publishes() {
-        let work = std::env::temp_dir().join(format!("ribbar-store-test-{}", std::process::id()));
-        let _ = fs::remove_dir_all(&work);
+        let work = scratch("commit");
         let store = Store::new(&work);
         let key = StageKey::new("geometry", json!({"bar": 1}));
         let _lock = store.lock(&key).unwrap();
         let partial = store.begin(&key, false).unwrap();
         fs::write(partial.join("geometry.json"), "{}").unwrap();
         assert!(!store.is_done(&key));
-        store.commit(&key, &partial, 0.5).unwrap();
+        let committed = store.commit(&key, &partial, 0.5).unwrap();
         assert!(store.is_done(&key));
-        store.publish("r1", &key, &["geometry.json"]).unwrap();
-        assert!(work.join("r1/geometry.json").is_file());
-        assert_eq!(store.read_record("r1").unwrap()["geometry"].key, key.key);
+        assert_eq!(committed.record.files["geometry.json"].size, 2);
+        let stored = store.artifact_dir(&key).join("geometry.json");
+        assert!(fs::metadata(&stored).unwrap().permissions().readonly());
+        store
+            .publish("r1", &committed.record, &["geometry.json"])
+            .unwrap();
+        let published = work.join("r1/geometry.json");
+        assert!(published.is_file());
+        assert!(!fs::metadata(&published).unwrap().permissions().readonly());
+        fs::write(&published, "{\"edited\": 1}").unwrap();
+        assert_eq!(fs::read_to_string(&stored).unwrap(), "{}");
+        let record = store.read_record("r1").unwrap().unwrap();
+        assert_eq!(record.stages["geometry"].key.key, key.key);
         fs::remove_dir_all(&work).unwrap();
+    }
+
+    /// One definition of finished for lookup and commit: a folder under the
+    /// key without `stage.json` is not finished, and a commit moves it to the
+    /// quarantine instead of keeping it and dropping the fresh result.
+    #[test]
+    fn commit_replaces_an_unfinished_folder_and_keeps_it_aside() {
+        let work = scratch("unfinished");
+        let store = Store::new(&work);
+        let key = StageKey::new("solve", json!({"mu": 0.3}));
+        let stale = store.artifact_dir(&key);
+        fs::create_dir_all(&stale).unwrap();
+        fs::write(stale.join("curve.csv"), "stale").unwrap();
+        let Examined::Damaged(why) = store.examine(&key, Thoroughness::Lookup) else {
+            panic!("an unfinished folder is not finished");
+        };
+        assert!(why.contains("stage.json: missing"), "{why}");
+        let partial = store.begin(&key, false).unwrap();
+        fs::write(partial.join("curve.csv"), "fresh").unwrap();
+        let committed = store.commit(&key, &partial, 0.1).unwrap();
+        let (_, moved) = committed.replaced.expect("the stale folder was moved");
+        assert_eq!(
+            fs::read_to_string(moved.join("curve.csv")).unwrap(),
+            "stale"
+        );
+        assert_eq!(
+            fs::read_to_string(stale.join("curve.csv")).unwrap(),
+            "fresh"
+        );
+        assert!(store.is_done(&key));
+        // A second commit of the same key finds the first finished and
+        // keeps it (a concurrent process made the same result).
+        let partial = store.begin(&key, false).unwrap();
+        fs::write(partial.join("curve.csv"), "fresh").unwrap();
+        assert!(store
+            .commit(&key, &partial, 0.1)
+            .unwrap()
+            .replaced
+            .is_none());
+        assert!(!partial.exists());
+        // The record of another key in the folder is not this key's.
+        let other = StageKey::new("solve", json!({"mu": 0.4}));
+        let other_dir = store.artifact_dir(&other);
+        fs::create_dir_all(store.stage_root("solve")).unwrap();
+        copy_dir(&stale, &other_dir);
+        let Examined::Damaged(why) = store.examine(&other, Thoroughness::Lookup) else {
+            panic!("a copied folder is not the other key's");
+        };
+        assert!(why.contains("not of this key"), "{why}");
+        fs::remove_dir_all(&work).unwrap();
+    }
+
+    fn copy_dir(from: &Path, to: &Path) {
+        fs::create_dir_all(to).unwrap();
+        for e in fs::read_dir(from).unwrap() {
+            let e = e.unwrap();
+            fs::copy(e.path(), to.join(e.file_name())).unwrap();
+        }
+    }
+
+    /// Lookups check by digest when the files are small or cheap to hash
+    /// against the stage's time, by sizes (and moved times) otherwise.
+    #[test]
+    fn lookups_check_digests_when_cheap() {
+        let record = |bytes: u64, wall: f64| StageRecord {
+            key: StageKey {
+                wall_time_s: Some(wall),
+                ..StageKey::new("solve", json!({}))
+            },
+            files: [(
+                "curve.csv".to_string(),
+                FileDigest {
+                    size: bytes,
+                    sha256: String::new(),
+                    mtime_ns: 0,
+                },
+            )]
+            .into(),
+        };
+        assert_eq!(record(1000, 0.0).lookup_depth(), Depth::Digests);
+        assert_eq!(record(300_000_000, 100.0).lookup_depth(), Depth::Digests);
+        assert_eq!(record(300_000_000, 10.0).lookup_depth(), Depth::Sizes);
     }
 }
