@@ -50,8 +50,10 @@ pub enum Command {
     Run(SceneArgs),
     /// Show for each stage: up to date, stale (and which keys changed), or missing.
     Status(SceneArgs),
-    /// Remove the scene's results (and, with --all, the whole store).
+    /// Remove what ribbar made of the scene's results and its in-progress stages (and, with --all, the whole store).
     Clean(CleanArgs),
+    /// Check every stored result against its recorded digests (and a scene's results folder); move damaged ones aside.
+    Verify(VerifyArgs),
     /// Drive one material point along a loading path (like MFront's mtest).
     Material(MaterialArgs),
     /// Run a study: a base spec with lists of values, or a convergence series over a mesh or step size.
@@ -110,6 +112,16 @@ pub struct CleanArgs {
 }
 
 #[derive(Debug, Args)]
+pub struct VerifyArgs {
+    /// Scene spec: check only its stages and results folder (default: the whole store).
+    pub spec: Option<PathBuf>,
+    #[arg(long, default_value = "ribbar-work")]
+    pub work: PathBuf,
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub overrides: Vec<String>,
+}
+
+#[derive(Debug, Args)]
 pub struct CompareArgs {
     /// The run compared: its curve.csv (or the scene directory holding it).
     pub test: PathBuf,
@@ -118,6 +130,10 @@ pub struct CompareArgs {
     /// Abscissa of the comparison: free-end displacement or imposed displacement.
     #[arg(long, value_enum, default_value = "fed")]
     pub along: CompareAxis,
+    /// Compare curves that end far apart (one under 90 % of the other's
+    /// range) over their common range instead of refusing them.
+    #[arg(long)]
+    pub common_range: bool,
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum, PartialEq, Eq)]
