@@ -8,6 +8,7 @@ use crate::cli::StudyArgs;
 use crate::post::{self, ConvergenceStudy, CurveRow, GridResult, StudyCase};
 use crate::progress::Printer;
 use crate::study::{Case, Study, StudyKind};
+use crate::study_outcome::{summary_line, CaseFailure, CaseOutcome};
 use anyhow::{bail, Context, Result};
 use std::path::Path;
 use std::process::{Command, ExitCode, Stdio};
@@ -135,16 +136,17 @@ pub fn run(args: &StudyArgs, printer: &Printer) -> Result<ExitCode> {
         args.jobs
     ));
 
-    let failed = Mutex::new(Vec::<(String, String)>::new());
-    let fail = |case: &Case, stage: &str, log: &Path| {
-        let why = match child_error(log) {
-            Some(e) => format!("{stage} failed: {e} (log {})", log.display()),
-            None => format!("{stage} failed, see {}", log.display()),
+    let failed = Mutex::new(Vec::<(String, CaseFailure)>::new());
+    let fail = |case: &Case, command: &str, log: &Path| {
+        let failure = CaseFailure {
+            command: command.to_string(),
+            cause: child_error(log),
+            log: log.to_path_buf(),
         };
         failed
             .lock()
             .unwrap_or_else(|e| e.into_inner())
-            .push((case.name.clone(), why));
+            .push((case.name.clone(), failure));
     };
     // Meshes first: gmsh's memory is small, and the mesh sizes tell the
     // solves' memory.
@@ -187,43 +189,68 @@ pub fn run(args: &StudyArgs, printer: &Printer) -> Result<ExitCode> {
             }
         },
     );
-    collect(&study, &args.work, &out, printer)?;
     let failed = failed.into_inner().unwrap_or_else(|e| e.into_inner());
-    for (name, why) in &failed {
-        printer.line(&format!("[{name}] {why}"));
+    for (name, failure) in &failed {
+        printer.line(&format!("[{name}] {}", failure.describe()));
     }
-    if failed.is_empty() {
+    let outcomes = collect(&study, &args.work, &out, &failed, printer)?;
+    let unfinished = outcomes
+        .iter()
+        .filter(|o| matches!(o, CaseOutcome::Stopped { .. } | CaseOutcome::Failed { .. }))
+        .count();
+    if unfinished == 0 {
         Ok(ExitCode::SUCCESS)
     } else {
         bail!(
-            "{} of {} cases failed (their logs are named above); the others' results are kept",
-            failed.len(),
+            "{unfinished} of {} cases failed or stopped early (their logs are named above and \
+             in the table); the others' results are kept",
             study.cases.len()
         )
     }
 }
 
-/// Tables and plots of every case that has published a summary.
-pub fn collect(study: &Study, work: &Path, out: &Path, printer: &Printer) -> Result<()> {
+/// Tables and plots of the study: a row for every case (`failures`: the
+/// cases whose child failed), with how it ended, the results of each case
+/// that has them; returns each case's outcome, in the study's order.
+pub fn collect(
+    study: &Study,
+    work: &Path,
+    out: &Path,
+    failures: &[(String, CaseFailure)],
+    printer: &Printer,
+) -> Result<Vec<CaseOutcome>> {
     let mut curves: Vec<(String, Vec<CurveRow>)> = Vec::new();
     let mut cases: Vec<StudyCase> = Vec::new();
     let mut grids: Vec<(f64, serde_json::Value)> = Vec::new();
+    let mut outcomes = Vec::new();
     for case in &study.cases {
         let dir = work.join(&case.name);
-        let (Ok(rows), Ok(summary)) = (
-            post::read_curve_csv(&dir.join("curve.csv")),
-            std::fs::read(dir.join("summary.json")),
-        ) else {
+        let failure = failures
+            .iter()
+            .find(|(n, _)| *n == case.name)
+            .map(|(_, f)| f);
+        let outcome = CaseOutcome::of_case(work, &case.name, failure);
+        let results = outcome.has_results().then(|| {
+            (
+                post::read_curve_csv(&dir.join("curve.csv")),
+                std::fs::read(dir.join("summary.json")),
+            )
+        });
+        let Some((Ok(rows), Ok(summary))) = results else {
+            let mut row =
+                StudyCase::from_summary(&case.name, &case.parameters, &serde_json::Value::Null);
+            outcome.prepend_to(&mut row);
+            cases.push(row);
+            outcomes.push(outcome);
             continue;
         };
         let summary: serde_json::Value = serde_json::from_slice(&summary)
             .with_context(|| format!("{}: not valid JSON", dir.join("summary.json").display()))?;
         let label = post::parameters_label(&case.parameters);
-        cases.push(StudyCase::from_summary(
-            &case.name,
-            &case.parameters,
-            &summary,
-        ));
+        let mut row = StudyCase::from_summary(&case.name, &case.parameters, &summary);
+        outcome.prepend_to(&mut row);
+        cases.push(row);
+        outcomes.push(outcome);
         if study.kind == StudyKind::Convergence {
             let (key, value) = &case.parameters[0];
             let h = crate::study::size_of(key, value).map_err(anyhow::Error::msg)?;
@@ -231,10 +258,25 @@ pub fn collect(study: &Study, work: &Path, out: &Path, printer: &Printer) -> Res
         }
         curves.push((label, rows));
     }
-    if cases.is_empty() {
-        bail!("no case of study {} has results", study.name);
-    }
     post::write_study_tables(&cases, &out.join("table.csv"), &out.join("table.md"))?;
+    printer.line(&summary_line(&study.name, &outcomes));
+    if curves.is_empty() {
+        let first = outcomes
+            .iter()
+            .find_map(|o| match o {
+                CaseOutcome::Failed { stage, cause, log } => Some(format!(
+                    "the first failed in {stage}: {cause} (log {})",
+                    log.display()
+                )),
+                _ => None,
+            })
+            .unwrap_or_default();
+        bail!(
+            "no case of study {} has results; {first}; every case's row is in {}",
+            study.name,
+            out.join("table.csv").display()
+        );
+    }
     let refs: Vec<(&str, &[CurveRow])> = curves
         .iter()
         .map(|(l, r)| (l.as_str(), r.as_slice()))
@@ -256,7 +298,7 @@ pub fn collect(study: &Study, work: &Path, out: &Path, printer: &Printer) -> Res
         }
     }
     printer.line(&format!("study tables and plots: {}", out.display()));
-    Ok(())
+    Ok(outcomes)
 }
 
 /// The quantities a convergence study estimates, as (name, pointer into
