@@ -26,8 +26,14 @@ pub fn run(ctx: &Ctx, out: &Path) -> Result<()> {
             )
         },
     )?;
+    let estimate = mesh::estimate::estimated_tets(
+        &ctx.scene.bar,
+        &ctx.scene.specimen.geometry,
+        &ctx.scene.mesh,
+    );
     ctx.printer.detail(&format!(
-        "mesh: {} nodes, {} steel + {} concrete tets, {} interface elements, min quality {:.3}",
+        "mesh: {} nodes, {} steel + {} concrete tets ({estimate:.0} estimated from the size \
+         field), {} interface elements, min quality {:.3}",
         report.nodes,
         report.tets_steel,
         report.tets_concrete,
