@@ -13,18 +13,25 @@ use std::path::{Path, PathBuf};
 pub const MAX_SPEC_BYTES: u64 = 1 << 20;
 /// The largest table (a `curve.csv` given to `compare`) read, bytes.
 pub const MAX_TABLE_BYTES: u64 = 1 << 30;
+/// The largest record of ribbar's own read (`stage.json`, a results
+/// folder's record), bytes: a solve with fields at every step lists a few
+/// thousand files in a few hundred kB.
+pub const MAX_RECORD_BYTES: u64 = 64 << 20;
 
 /// The text of the regular file `path`, refused (an `InvalidInput` error
 /// that says why) when it is not a regular file (a device, a FIFO, a
 /// directory) or is larger than `cap` bytes.
 pub fn read_capped(path: &Path, cap: u64) -> std::io::Result<String> {
     let invalid = |why: String| std::io::Error::new(std::io::ErrorKind::InvalidInput, why);
+    let not_regular = || invalid("not a regular file (a device, a pipe or a directory)".into());
+    // Looked at before it is opened: opening a FIFO waits for a writer.
+    if !std::fs::metadata(path)?.is_file() {
+        return Err(not_regular());
+    }
     let file = std::fs::File::open(path)?;
     let meta = file.metadata()?;
     if !meta.is_file() {
-        return Err(invalid(
-            "not a regular file (a device, a pipe or a directory)".into(),
-        ));
+        return Err(not_regular());
     }
     if meta.len() > cap {
         return Err(invalid(format!(

@@ -82,7 +82,14 @@ fn in_progress(store: &Store, scene: &Scene, printer: &Printer) -> Result<()> {
 pub fn scene(store: &Store, scene: &Scene, printer: &Printer) -> Result<()> {
     in_progress(store, scene, printer)?;
     let dir = store.scene_dir(&scene.name);
-    if store.read_record(&scene.name)?.is_none() {
+    let record = store.read_record(&scene.name).map_err(|e| {
+        anyhow::anyhow!(
+            "{e}; ribbar cannot tell its files in {} from others, so nothing there was removed \
+             (`ribbar run` keeps the record aside and publishes the results again)",
+            dir.display()
+        )
+    })?;
+    if record.is_none() {
         if dir.exists() {
             printer.line(&format!(
                 "kept {}: ribbar did not make it (it has no {RECORD_FILE}); nothing removed",

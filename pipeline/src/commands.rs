@@ -43,7 +43,7 @@ pub fn run_scene(scene: &Scene, work: &Path, stages: &[Stage], printer: &Printer
         [.., last] if stages.len() < Stage::ALL.len() => last.name(),
         _ => "run",
     };
-    let before = folder::begin_run(&store, &scene.name, command, &keys)?;
+    let before = folder::begin_run(&store, &scene.name, command, &keys, printer)?;
     for &stage in stages {
         if let Err(e) = crate::stage::ensure(&ctx, stage) {
             printer.finish();

@@ -41,7 +41,7 @@ mod publish;
 mod record;
 
 pub use digest::{check_cost, sha256_file, Depth, FileDigest};
-pub use publish::{edited_name, publish_cost, FileState, Published};
+pub use publish::{edited_name, publish_cost, Compare, FileState, Published};
 pub use record::{
     unix_now, utc_text, PublishedFile, PublishedStage, RunOutcome, RunRecord, SceneRecord,
     RECORD_FILE,
@@ -414,7 +414,7 @@ fn examine_dir(dir: &Path, stage: &str, key: &str, thoroughness: Thoroughness) -
         Ok(_) => {}
     }
     let stage_json = dir.join(STAGE_FILE);
-    let bytes = match fs::read(&stage_json) {
+    let bytes = match geom::fsutil::read_capped(&stage_json, geom::fsutil::MAX_RECORD_BYTES) {
         Ok(b) => b,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
             return Examined::Damaged(format!(
@@ -424,7 +424,7 @@ fn examine_dir(dir: &Path, stage: &str, key: &str, thoroughness: Thoroughness) -
         }
         Err(e) => return Examined::Damaged(format!("{}: {e}", stage_json.display())),
     };
-    let record: StageRecord = match serde_json::from_slice(&bytes) {
+    let record: StageRecord = match serde_json::from_str(&bytes) {
         Ok(r) => r,
         Err(e) => {
             return Examined::Damaged(format!(

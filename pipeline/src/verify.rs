@@ -10,7 +10,7 @@ use crate::cli::VerifyArgs;
 use crate::progress::Printer;
 use crate::scene::Scene;
 use crate::stage::{Keys, Stage, CHECKPOINT_FILE};
-use crate::store::{Examined, FileState, Store, Thoroughness, RECORD_FILE};
+use crate::store::{Compare, Examined, FileState, Store, Thoroughness, RECORD_FILE};
 use anyhow::Result;
 use std::process::ExitCode;
 
@@ -110,14 +110,21 @@ fn check_checkpoint(
 
 /// Checks a results folder's files against its record.
 fn check_folder(store: &Store, scene: &str, tally: &mut Tally, printer: &Printer) -> Result<()> {
-    let Some(record) = store.read_record(scene)? else {
-        return Ok(());
+    let record = match store.read_record(scene) {
+        Ok(Some(record)) => record,
+        Ok(None) => return Ok(()),
+        Err(e) => {
+            tally.problems += 1;
+            printer.line(&format!("{e}"));
+            return Ok(());
+        }
     };
     for stage in Stage::ALL {
         let Some(published) = record.stages.get(stage.name()) else {
             continue;
         };
-        for (path, state) in store.published_changes(scene, published, stage.published_files()) {
+        let files = stage.published_files();
+        for (path, state) in store.published_changes(scene, published, files, Compare::Digest) {
             tally.problems += 1;
             let what = if state == FileState::Absent {
                 "missing"

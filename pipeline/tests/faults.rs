@@ -623,6 +623,18 @@ fn hostile_sizes_are_refused_before_the_work() {
         out.contains("/dev/zero") && out.contains("not a regular file"),
         "{out}"
     );
+    // A pipe with no writer: opening it would wait for ever.
+    let fifo = dir.join("spec.fifo");
+    assert!(Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .unwrap()
+        .success());
+    let out = fails(&["run", fifo.to_str().unwrap(), "--work", w.to_str().unwrap()]);
+    assert!(
+        out.contains("spec.fifo") && out.contains("not a regular file"),
+        "{out}"
+    );
     let huge = dir.join("huge.yaml");
     std::fs::write(&huge, format!("name: huge\n#{}\n", "x".repeat(2 << 20))).unwrap();
     let out = fails(&[
@@ -951,4 +963,51 @@ fn every_study_case_has_a_row_saying_how_it_ended() {
     );
     assert_eq!(read(&w.join("failing/table.csv")).lines().count(), 3);
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// The results folder's own record damaged, deleted, or a file where a
+/// folder of results goes: `status` and `clean` say so without removing
+/// anything, and `run` publishes the results again, losing no file (what
+/// was in the way is moved aside under a name that says so).
+#[test]
+fn a_damaged_or_missing_record_loses_nothing() {
+    let work = work_dir("record");
+    ok(&strs(&tiny("run", &work, &["-q"])));
+    let scene = work.join("tiny-smooth");
+    let expected = files(&scene);
+    let record = scene.join(".ribbar-stages.json");
+    std::fs::write(&record, "{ not json").unwrap();
+    let status = ok(&strs(&tiny("status", &work, &[])));
+    assert!(
+        status.contains(".ribbar-stages.json") && status.contains("corrupt"),
+        "{status}"
+    );
+    let out = fails(&strs(&tiny("clean", &work, &[])));
+    assert!(out.contains("nothing there was removed"), "{out}");
+    assert_eq!(files(&scene).len(), expected.len());
+    let out = ok(&strs(&tiny("run", &work, &[])));
+    assert!(
+        out.contains("kept as") && out.contains(".ribbar-stages.damaged.json"),
+        "{out}"
+    );
+    assert!(
+        !out.contains(".edited"),
+        "identical files are kept as they are:\n{out}"
+    );
+    std::fs::remove_file(&record).unwrap();
+    let out = ok(&strs(&tiny("run", &work, &[])));
+    assert!(!out.contains(".edited"), "{out}");
+    std::fs::remove_dir_all(scene.join("fields")).unwrap();
+    std::fs::write(scene.join("fields"), "not a folder").unwrap();
+    let out = ok(&strs(&tiny("run", &work, &[])));
+    assert!(
+        out.contains("fields") && out.contains("kept as fields.edited"),
+        "{out}"
+    );
+    let now = files(&scene);
+    for (rel, bytes) in expected.iter().filter(|(r, _)| !r.starts_with(".ribbar")) {
+        assert_eq!(now.get(rel), Some(bytes), "{rel}");
+    }
+    assert_eq!(read(&scene.join("fields.edited")), "not a folder");
+    std::fs::remove_dir_all(&work).unwrap();
 }

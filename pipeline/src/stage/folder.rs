@@ -94,8 +94,20 @@ fn held(record: &SceneRecord) -> Held {
 /// Records that `command` starts on `scene` with `keys`, after checking
 /// that the results folder is ribbar's (or new, or empty); returns what
 /// the folder held.
-pub fn begin_run(store: &Store, scene: &str, command: &str, keys: &Keys) -> Result<Held> {
-    store.claim_scene_dir(scene)?;
+pub fn begin_run(
+    store: &Store,
+    scene: &str,
+    command: &str,
+    keys: &Keys,
+    printer: &Printer,
+) -> Result<Held> {
+    let names: Vec<&str> = Stage::ALL
+        .iter()
+        .flat_map(|s| s.published_files().iter().copied())
+        .collect();
+    if let Some(note) = store.claim_scene_dir(scene, &names)? {
+        printer.line(&format!("results: {note}"));
+    }
     let before = held(&store.read_record(scene)?.unwrap_or_default());
     store.update_record(scene, |r| {
         r.run = Some(RunRecord {

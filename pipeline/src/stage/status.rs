@@ -5,8 +5,8 @@
 use super::keys::Keys;
 use super::kinds::{Stage, CHECKPOINT_FILE};
 use crate::scene::Scene;
-use crate::store::Thoroughness;
 use crate::store::{changed_keys, utc_text, Examined, FileState, RunOutcome, StageKey, Store};
+use crate::store::{Compare, Thoroughness};
 use anyhow::Result;
 
 /// What `status` says of one stage.
@@ -24,7 +24,12 @@ pub enum StageStatus {
 }
 
 pub fn status(store: &Store, scene: &Scene, keys: &Keys) -> Result<Vec<(Stage, StageStatus)>> {
-    let record = store.read_record(&scene.name)?.unwrap_or_default();
+    // A damaged record is `folder_report`'s to name.
+    let record = store
+        .read_record(&scene.name)
+        .ok()
+        .flatten()
+        .unwrap_or_default();
     Ok(Stage::ALL
         .into_iter()
         .map(|stage| {
@@ -76,8 +81,14 @@ fn stale_reasons(old: &StageKey, new: &StageKey) -> Vec<String> {
 /// published file that is not as ribbar wrote it.
 pub fn folder_report(store: &Store, scene: &Scene, keys: &Keys) -> Result<Vec<String>> {
     let dir = store.scene_dir(&scene.name);
-    let Some(record) = store.read_record(&scene.name)? else {
-        return Ok(vec![format!("{}: no results yet", dir.display())]);
+    let record = match store.read_record(&scene.name) {
+        Ok(Some(record)) => record,
+        Ok(None) => return Ok(vec![format!("{}: no results yet", dir.display())]),
+        Err(e) => {
+            return Ok(vec![format!(
+                "{e}: `ribbar run` keeps it aside and publishes the results again"
+            )])
+        }
     };
     let mut lines = Vec::new();
     if let Some(run) = &record.run {
@@ -119,7 +130,8 @@ pub fn folder_report(store: &Store, scene: &Scene, keys: &Keys) -> Result<Vec<St
         let Some(p) = record.stages.get(stage.name()) else {
             continue;
         };
-        for (path, state) in store.published_changes(&scene.name, p, stage.published_files()) {
+        let files = stage.published_files();
+        for (path, state) in store.published_changes(&scene.name, p, files, Compare::Quick) {
             let what = match state {
                 FileState::Absent => "missing",
                 _ => "changed since ribbar wrote it",

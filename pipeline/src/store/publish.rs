@@ -95,8 +95,26 @@ enum Claim<'a> {
     None,
 }
 
+/// How a published file is compared with its record.
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub enum Compare {
+    /// Size and time first; the digest only when they moved.
+    Quick,
+    /// Always the digest (`ribbar verify`).
+    Digest,
+}
+
 /// The state of `path` against `claim` and the content about to go there.
 fn state(path: &Path, claim: Claim, new_sha: Option<&str>) -> Result<FileState, StoreError> {
+    state_by(path, claim, new_sha, Compare::Quick)
+}
+
+fn state_by(
+    path: &Path,
+    claim: Claim,
+    new_sha: Option<&str>,
+    compare: Compare,
+) -> Result<FileState, StoreError> {
     let meta = match fs::symlink_metadata(path) {
         Ok(m) => m,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(FileState::Absent),
@@ -105,7 +123,7 @@ fn state(path: &Path, claim: Claim, new_sha: Option<&str>) -> Result<FileState, 
     if !meta.is_file() {
         return Ok(FileState::Changed);
     }
-    if let Claim::Recorded(r) = claim {
+    if let (Claim::Recorded(r), Compare::Quick) = (claim, compare) {
         if meta.len() == r.size && mtime_ns(&meta) == r.mtime_ns {
             return Ok(if new_sha == Some(r.sha256.as_str()) {
                 FileState::Same
@@ -134,6 +152,24 @@ fn move_aside(path: &Path, why: &str) -> Result<String, StoreError> {
     ))
 }
 
+/// Moves aside anything that is not a folder where `rel` needs one (a file
+/// named `fields`, say); the sentences that say so.
+fn clear_the_way(root: &Path, rel: &str) -> Result<Vec<String>, StoreError> {
+    let mut notes = Vec::new();
+    let mut dir = root.to_path_buf();
+    let parts: Vec<&str> = rel.split('/').collect();
+    for part in &parts[..parts.len().saturating_sub(1)] {
+        dir.push(part);
+        if fs::symlink_metadata(&dir).is_ok_and(|m| !m.is_dir()) {
+            notes.push(move_aside(
+                &dir,
+                "is where ribbar puts a folder of results",
+            )?);
+        }
+    }
+    Ok(notes)
+}
+
 /// The record of a file as it now is at `path`, with `sha256`.
 fn fingerprint(path: &Path, sha256: &str) -> Result<PublishedFile, StoreError> {
     let meta = fs::metadata(path).map_err(io_err(path))?;
@@ -152,7 +188,11 @@ fn copy_atomic(src: &Path, dst: &Path) -> Result<u64, StoreError> {
     }
     let tmp = geom::fsutil::temp_sibling(dst);
     let _ = fs::remove_file(&tmp);
-    let copied = fs::copy(src, &tmp).map_err(io_err(&tmp))?;
+    let copied = fs::copy(src, &tmp).map_err(|e| {
+        // A disk that filled up leaves no half copy behind.
+        let _ = fs::remove_file(&tmp);
+        io_err(&tmp)(e)
+    })?;
     let mut perms = fs::metadata(&tmp).map_err(io_err(&tmp))?.permissions();
     #[cfg(unix)]
     {
@@ -245,6 +285,7 @@ impl Store {
         let mut files = BTreeMap::new();
         for (rel, digest) in record.files.iter().filter(|(r, _)| under(r, entries)) {
             let dst = dst_root.join(rel);
+            done.notes.extend(clear_the_way(&dst_root, rel)?);
             let claim = claim_of(&scene_record, stage, rel, entries);
             let now = state(&dst, claim, Some(&digest.sha256))?;
             if now == FileState::Changed {
@@ -328,13 +369,14 @@ impl Store {
         scene: &str,
         stage: &PublishedStage,
         entries: &[&str],
+        compare: Compare,
     ) -> Vec<(PathBuf, FileState)> {
         let root = self.scene_dir(scene);
         files_of(&root, stage, entries)
             .into_iter()
             .filter_map(|(rel, claim)| {
                 let path = root.join(&rel);
-                match state(&path, claim, None) {
+                match state_by(&path, claim, None, compare) {
                     Ok(FileState::Ours | FileState::Same) => None,
                     Ok(s) => Some((path, s)),
                     Err(_) => Some((path, FileState::Changed)),

@@ -114,6 +114,19 @@ pub fn utc_text(unix_s: u64) -> String {
     )
 }
 
+/// The name a file kept as changed had (`curve.edited-2.csv` →
+/// `curve.csv`, `fields.edited` → `fields`).
+fn unedited(name: &str) -> String {
+    match name.find(".edited") {
+        None => name.to_string(),
+        Some(at) => {
+            let rest = &name[at + ".edited".len()..];
+            let rest = rest.trim_start_matches(|c: char| c == '-' || c.is_ascii_digit());
+            format!("{}{rest}", &name[..at])
+        }
+    }
+}
+
 /// A record as read: this format, or format 1's map of stage keys.
 fn parse(bytes: &[u8]) -> Result<SceneRecord, String> {
     let value: Value = serde_json::from_slice(bytes).map_err(|e| e.to_string())?;
@@ -135,8 +148,8 @@ impl Store {
     /// The results folder's record; `None` when the folder has none.
     pub fn read_record(&self, scene: &str) -> Result<Option<SceneRecord>, StoreError> {
         let path = self.scene_dir(scene).join(RECORD_FILE);
-        match fs::read(&path) {
-            Ok(bytes) => parse(&bytes)
+        match geom::fsutil::read_capped(&path, geom::fsutil::MAX_RECORD_BYTES) {
+            Ok(text) => parse(text.as_bytes())
                 .map(Some)
                 .map_err(|reason| StoreError::Corrupt { path, reason }),
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
@@ -152,19 +165,50 @@ impl Store {
         )
     }
 
-    /// Refuses a results folder that exists, holds files and has no record:
-    /// a folder of the user's that happens to have the scene's name.
-    pub fn claim_scene_dir(&self, scene: &str) -> Result<(), StoreError> {
+    /// Refuses a results folder that exists and has no record, unless
+    /// everything in it has one of the names ribbar publishes (`names`: a
+    /// folder whose record was deleted): a folder of the user's that
+    /// happens to have the scene's name. A record that cannot be read is
+    /// moved aside (its name says so) and the folder taken as one without
+    /// a record of its files: nothing in it is then overwritten or removed,
+    /// only moved aside where a result goes. Returns what was said.
+    pub fn claim_scene_dir(
+        &self,
+        scene: &str,
+        names: &[&str],
+    ) -> Result<Option<String>, StoreError> {
         let dir = self.scene_dir(scene);
-        if dir.join(RECORD_FILE).is_file() {
-            return Ok(());
+        let record = dir.join(RECORD_FILE);
+        if record.is_file() {
+            return match self.read_record(scene) {
+                Ok(_) => Ok(None),
+                Err(StoreError::Corrupt { reason, .. }) => {
+                    let kept = dir.join(".ribbar-stages.damaged.json");
+                    fs::rename(&record, &kept).map_err(io_err(&record))?;
+                    self.write_record(scene, &SceneRecord::default())?;
+                    Ok(Some(format!(
+                        "{}: damaged ({reason}); kept as {}: files found where results go are \
+                         moved aside, not overwritten",
+                        record.display(),
+                        kept.display()
+                    )))
+                }
+                Err(e) => Err(e),
+            };
         }
-        match fs::read_dir(&dir).map(|mut entries| entries.next().is_none()) {
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(()),
-            Err(e) => Err(io_err(&dir)(e)),
-            Ok(true) => Ok(()),
-            Ok(false) => Err(StoreError::NotOurs { path: dir }),
+        let entries = match fs::read_dir(&dir) {
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
+            Err(e) => return Err(io_err(&dir)(e)),
+            Ok(entries) => entries,
+        };
+        for entry in entries {
+            let entry = entry.map_err(io_err(&dir))?;
+            let name = entry.file_name().to_string_lossy().into_owned();
+            if !(name.starts_with(".ribbar-stages") || names.contains(&unedited(&name).as_str())) {
+                return Err(StoreError::NotOurs { path: dir });
+            }
         }
+        Ok(None)
     }
 
     /// Reads, changes and writes back the scene's record.
@@ -191,6 +235,15 @@ mod tests {
         assert_eq!(utc_text(0), "1970-01-01 00:00:00 UTC");
         assert_eq!(utc_text(951_782_400), "2000-02-29 00:00:00 UTC");
         assert_eq!(utc_text(1_764_623_763), "2025-12-01 21:16:03 UTC");
+    }
+
+    /// Changed files kept aside read back as the result they stood for.
+    #[test]
+    fn edited_names_read_back() {
+        assert_eq!(unedited("curve.edited-2.csv"), "curve.csv");
+        assert_eq!(unedited("curve.edited.csv"), "curve.csv");
+        assert_eq!(unedited("fields.edited"), "fields");
+        assert_eq!(unedited("thesis.tex"), "thesis.tex");
     }
 
     /// A record of the first format (stage → key) reads as stages with no
