@@ -177,13 +177,14 @@ pub fn run(args: &VerifyArgs, printer: &Printer) -> Result<ExitCode> {
     }
     let (seconds, _) = crate::store::check_cost();
     println!(
-        "verified {} stored results ({} files, {:.1} MB) and {} results folders in {seconds:.2} s: {}",
+        "verified {} stored results ({} files, {:.1} MB) and {} results folders in {seconds:.3} s: {}",
         tally.results,
         tally.files,
         tally.bytes as f64 * 1e-6,
         scenes.len(),
         match tally.problems {
             0 => "everything as recorded".to_string(),
+            1 => "1 problem (named above)".to_string(),
             n => format!("{n} problems (named above)"),
         }
     );
