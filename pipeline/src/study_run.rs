@@ -111,9 +111,39 @@ fn pool<T: Sync>(
     });
 }
 
+/// What a study writes into `WORK/<study>/`, besides its cases' folders.
+const STUDY_OUTPUTS: [&str; 11] = [
+    "table.csv",
+    "table.md",
+    "bond_slip.png",
+    "bond_slip.svg",
+    "convergence.csv",
+    "convergence.md",
+    "curve_distances.csv",
+    "error_vs_time.png",
+    "error_vs_time.svg",
+    "Snakefile",
+    "logs",
+];
+
+/// The study file and its base spec must not be among what the study
+/// writes (its own folder's outputs, the store).
+fn refuse_inputs_among_outputs(study: &Study, args: &StudyArgs, out: &Path) -> Result<()> {
+    let outputs: Vec<std::path::PathBuf> = STUDY_OUTPUTS.iter().map(|f| out.join(f)).collect();
+    let store = [args.work.join(".store")];
+    crate::inputs::refuse_input_among_outputs("the study file", &args.study, &store, &outputs)?;
+    crate::inputs::refuse_input_among_outputs(
+        "the study's base spec",
+        &study.base,
+        &store,
+        &outputs,
+    )
+}
+
 pub fn run(args: &StudyArgs, printer: &Printer) -> Result<ExitCode> {
     let study = Study::load(&args.study)?;
     let out = args.work.join(&study.name);
+    refuse_inputs_among_outputs(&study, args, &out)?;
     std::fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
     if let Some(crate::cli::ExportFormat::Snakemake) = args.export {
         let path = out.join("Snakefile");

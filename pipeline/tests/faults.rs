@@ -390,8 +390,24 @@ fn interrupted_solve(work: &Path, extra: &[&str]) -> PathBuf {
     checkpoint
 }
 
-/// Repro 5: a checkpoint with flipped bytes, a truncated one and one of
-/// another run (another key) are each refused with their path named,
+/// A checkpoint file's frame (magic, format, key, length, SHA-256,
+/// state) with its key replaced by `key`.
+fn reframed(bytes: &[u8], key: &str) -> Vec<u8> {
+    use sha2::Digest;
+    let key_len = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+    let payload = &bytes[16 + key_len + 8 + 32..];
+    let mut out = bytes[..12].to_vec();
+    out.extend_from_slice(&(key.len() as u32).to_le_bytes());
+    out.extend_from_slice(key.as_bytes());
+    out.extend_from_slice(&(payload.len() as u64).to_le_bytes());
+    out.extend_from_slice(&sha2::Sha256::digest(payload));
+    out.extend_from_slice(payload);
+    out
+}
+
+/// Repro 5: a checkpoint with flipped bytes, a truncated one, one of
+/// another run (another key) and one of another mesh under this run's key
+/// are each refused with their path named,
 /// moved to the quarantine, and the solve starts over to the same curve as
 /// an uninterrupted run; `clean SPEC` removes an interrupted solve.
 #[test]
@@ -403,7 +419,7 @@ fn damaged_and_foreign_checkpoints_are_set_aside() {
     );
     ok(&strs(&args));
     let expected = read(&reference.join("tiny-smooth/curve.csv"));
-    for fault in ["flipped", "truncated", "foreign"] {
+    for fault in ["flipped", "truncated", "foreign", "other-mesh"] {
         let work = work_dir(&format!("cp-{fault}"));
         let w = work.to_str().unwrap();
         let checkpoint = match fault {
@@ -411,6 +427,21 @@ fn damaged_and_foreign_checkpoints_are_set_aside() {
                 let other = interrupted_solve(&work, &["--set", "materials.interface.mu=0.31"]);
                 let mine = interrupted_solve(&work, &[]);
                 std::fs::copy(&other, &mine).unwrap();
+                mine
+            }
+            "other-mesh" => {
+                // Another mesh's state framed with this run's own key: the
+                // solver's check of the model refuses it.
+                let other = interrupted_solve(&work, &["--set", "mesh.h_interface=1.8 mm"]);
+                let mine = interrupted_solve(&work, &[]);
+                let key = mine
+                    .parent()
+                    .unwrap()
+                    .file_name()
+                    .unwrap()
+                    .to_string_lossy();
+                let key = key.strip_suffix(".partial").unwrap().to_string();
+                std::fs::write(&mine, reframed(&std::fs::read(&other).unwrap(), &key)).unwrap();
                 mine
             }
             _ => {
@@ -428,6 +459,12 @@ fn damaged_and_foreign_checkpoints_are_set_aside() {
         );
         if fault == "foreign" {
             assert!(out.contains("belongs to the run with key"), "{out}");
+        }
+        if fault == "other-mesh" {
+            assert!(
+                out.contains("does not match") || out.contains("checkpoint has"),
+                "{out}"
+            );
         }
         assert_eq!(
             read(&work.join("tiny-smooth/curve.csv")),
@@ -490,10 +527,18 @@ fn clean_removes_only_what_ribbar_made() {
         out.contains("kept 2 files") && out.contains("notes.txt") && out.contains("curve.csv"),
         "{out}"
     );
-    assert_eq!(
-        files(&scene).into_keys().collect::<Vec<_>>(),
-        ["curve.csv", "notes.txt"]
-    );
+    let left = |scene: &Path| -> Vec<String> {
+        files(scene)
+            .into_keys()
+            .filter(|r| !r.starts_with(".ribbar"))
+            .collect()
+    };
+    assert_eq!(left(&scene), ["curve.csv", "notes.txt"]);
+    // The folder stays ribbar's: a run publishes beside the kept files.
+    let out = ok(&strs(&tiny("run", &work, &[])));
+    assert!(out.contains("kept as curve.edited.csv"), "{out}");
+    assert_eq!(read(&scene.join("notes.txt")), "mine");
+    assert_eq!(read(&scene.join("curve.edited.csv")), "edited");
     let out = ok(&["clean", "--all", "--work", work.to_str().unwrap()]);
     assert!(
         out.contains("kept 1 entries") && out.contains("mine.txt"),

@@ -386,8 +386,9 @@ impl Store {
     }
 
     /// Removes every file of `WORK/<scene>/` that ribbar wrote there as it
-    /// wrote it, then the record and the folders left empty. Returns the
-    /// paths removed and the paths kept (changed since, or not ribbar's).
+    /// wrote it and the folders left empty; the record too when nothing else
+    /// is left (else it stays, listing no results). Returns the paths
+    /// removed and the paths kept (changed since, or not ribbar's).
     pub fn remove_published(
         &self,
         scene: &str,
@@ -413,19 +414,31 @@ impl Store {
             }
         }
         let record_path = root.join(super::RECORD_FILE);
-        fs::remove_file(&record_path).map_err(io_err(&record_path))?;
-        // Only an empty folder goes: whatever is left is not ribbar's.
-        let _ = fs::remove_dir(&root);
-        let mut kept: Vec<PathBuf> = super::digest::list_files(&root, &[])
+        let others = |root: &Path| -> Vec<PathBuf> {
+            fs::read_dir(root)
+                .map(|entries| {
+                    entries
+                        .filter_map(|e| Some(e.ok()?.path()))
+                        .filter(|p| *p != record_path)
+                        .collect()
+                })
+                .unwrap_or_default()
+        };
+        let kept: Vec<PathBuf> = super::digest::list_files(&root, &[super::RECORD_FILE])
             .unwrap_or_default()
             .into_iter()
             .map(|rel| root.join(rel))
             .collect();
-        if kept.is_empty() {
-            if let Ok(entries) = fs::read_dir(&root) {
-                kept.extend(entries.filter_map(|e| Some(e.ok()?.path())));
-            }
+        if others(&root).is_empty() {
+            fs::remove_file(&record_path).map_err(io_err(&record_path))?;
+            let _ = fs::remove_dir(&root);
+        } else {
+            // What is left is not ribbar's; the folder stays a results
+            // folder (its record lists no results), so that a later run
+            // publishes beside those files instead of refusing the folder.
+            self.write_record(scene, &SceneRecord::default())?;
         }
+        let kept = if kept.is_empty() { others(&root) } else { kept };
         Ok((removed, kept))
     }
 }
