@@ -97,7 +97,8 @@ fn report_check_cost(printer: &Printer) {
 
 /// The reason recorded by a solve that stopped early, if it did.
 pub fn incomplete_solve(solve_json: &Path) -> Option<String> {
-    let v: serde_json::Value = serde_json::from_slice(&std::fs::read(solve_json).ok()?).ok()?;
+    let text = geom::fsutil::read_capped(solve_json, geom::fsutil::MAX_RECORD_BYTES).ok()?;
+    let v: serde_json::Value = serde_json::from_str(&text).ok()?;
     if v.get("completed")?.as_bool()? {
         None
     } else {

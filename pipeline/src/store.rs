@@ -256,8 +256,9 @@ impl Store {
 
     /// Wall time recorded when `key`'s artifacts were produced, s.
     pub fn wall_time(&self, key: &StageKey) -> Option<f64> {
-        let bytes = fs::read(self.artifact_dir(key).join(STAGE_FILE)).ok()?;
-        serde_json::from_slice::<StageRecord>(&bytes)
+        let path = self.artifact_dir(key).join(STAGE_FILE);
+        let text = geom::fsutil::read_capped(&path, geom::fsutil::MAX_RECORD_BYTES).ok()?;
+        serde_json::from_str::<StageRecord>(&text)
             .ok()?
             .key
             .wall_time_s

@@ -74,9 +74,11 @@ impl CaseOutcome {
                 },
             };
         }
-        let solve: Option<serde_json::Value> = std::fs::read(work.join(name).join("solve.json"))
-            .ok()
-            .and_then(|b| serde_json::from_slice(&b).ok());
+        let solve_json = work.join(name).join("solve.json");
+        let solve: Option<serde_json::Value> =
+            geom::fsutil::read_capped(&solve_json, geom::fsutil::MAX_RECORD_BYTES)
+                .ok()
+                .and_then(|text| serde_json::from_str(&text).ok());
         let Some(solve) = solve else {
             return CaseOutcome::Failed {
                 stage: "solve".into(),

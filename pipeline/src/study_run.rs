@@ -69,8 +69,9 @@ fn child_error(log: &Path) -> Option<String> {
 
 /// Nodes of a case's mesh, from its published mesh.json.
 fn case_dofs(work: &Path, case: &Case) -> Option<f64> {
-    let text = std::fs::read(work.join(&case.name).join("mesh.json")).ok()?;
-    let v: serde_json::Value = serde_json::from_slice(&text).ok()?;
+    let path = work.join(&case.name).join("mesh.json");
+    let text = geom::fsutil::read_capped(&path, geom::fsutil::MAX_RECORD_BYTES).ok()?;
+    let v: serde_json::Value = serde_json::from_str(&text).ok()?;
     Some(3.0 * v.get("nodes")?.as_f64()?)
 }
 
@@ -261,12 +262,15 @@ pub fn collect(
             .map(|(_, f)| f);
         let outcome = CaseOutcome::of_case(work, &case.name, failure);
         let results = outcome.has_results().then(|| {
+            let read = |name: &str| {
+                geom::fsutil::read_capped(&dir.join(name), geom::fsutil::MAX_TABLE_BYTES)
+            };
             (
-                post::read_curve_csv(&dir.join("curve.csv")),
-                std::fs::read(dir.join("summary.json")),
+                read("curve.csv").map(|text| post::parse_curve_csv(&text, &dir.join("curve.csv"))),
+                read("summary.json"),
             )
         });
-        let Some((Ok(rows), Ok(summary))) = results else {
+        let Some((Ok(Ok(rows)), Ok(summary))) = results else {
             let mut row =
                 StudyCase::from_summary(&case.name, &case.parameters, &serde_json::Value::Null);
             outcome.prepend_to(&mut row);
@@ -274,7 +278,7 @@ pub fn collect(
             outcomes.push(outcome);
             continue;
         };
-        let summary: serde_json::Value = serde_json::from_slice(&summary)
+        let summary: serde_json::Value = serde_json::from_str(&summary)
             .with_context(|| format!("{}: not valid JSON", dir.join("summary.json").display()))?;
         let label = post::parameters_label(&case.parameters);
         let mut row = StudyCase::from_summary(&case.name, &case.parameters, &summary);

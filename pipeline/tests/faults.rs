@@ -1010,10 +1010,11 @@ fn every_study_case_has_a_row_saying_how_it_ended() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
-/// The results folder's own record damaged, deleted, or a file where a
-/// folder of results goes: `status` and `clean` say so without removing
-/// anything, and `run` publishes the results again, losing no file (what
-/// was in the way is moved aside under a name that says so).
+/// The results folder's own record damaged, deleted, of the first format
+/// (keys only), or a file where a folder of results goes: `status` and
+/// `clean` say so without removing anything, and `run` publishes the
+/// results again, losing no file (what was in the way is moved aside under
+/// a name that says so).
 #[test]
 fn a_damaged_or_missing_record_loses_nothing() {
     let work = work_dir("record");
@@ -1054,5 +1055,31 @@ fn a_damaged_or_missing_record_loses_nothing() {
         assert_eq!(now.get(rel), Some(bytes), "{rel}");
     }
     assert_eq!(read(&scene.join("fields.edited")), "not a folder");
+    // A folder published by a ribbar whose record kept only the keys
+    // (stage → key): its results are replaced, a kept file is not.
+    let record: serde_json::Value = serde_json::from_str(&read(&record)).unwrap();
+    let legacy: serde_json::Map<String, serde_json::Value> = record["stages"]
+        .as_object()
+        .unwrap()
+        .iter()
+        .map(|(stage, p)| {
+            let mut key = p.clone();
+            key.as_object_mut().unwrap().remove("files");
+            (stage.clone(), key)
+        })
+        .collect();
+    std::fs::write(
+        scene.join(".ribbar-stages.json"),
+        serde_json::to_vec(&legacy).unwrap(),
+    )
+    .unwrap();
+    std::fs::write(scene.join("fields/peak_bulk.edited.vtu"), "mine").unwrap();
+    std::fs::write(scene.join("fields/step0099_bulk.vtu"), "an old step").unwrap();
+    ok(&strs(&tiny("run", &work, &["-q"])));
+    assert_eq!(read(&scene.join("fields/peak_bulk.edited.vtu")), "mine");
+    assert!(!scene.join("fields/step0099_bulk.vtu").exists());
+    for (rel, bytes) in expected.iter().filter(|(r, _)| !r.starts_with(".ribbar")) {
+        assert_eq!(files(&scene).get(rel), Some(bytes), "{rel}");
+    }
     std::fs::remove_dir_all(&work).unwrap();
 }

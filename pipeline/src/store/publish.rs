@@ -218,10 +218,11 @@ fn files_of<'a>(
             .iter()
             .map(|(rel, f)| (rel.clone(), Claim::Recorded(f)))
             .collect(),
+        // Files kept aside as changed are never taken for results.
         None => super::digest::list_files(dir, &[])
             .unwrap_or_default()
             .into_iter()
-            .filter(|rel| under(rel, entries))
+            .filter(|rel| under(rel, entries) && super::record::unedited(rel) == *rel)
             .map(|rel| (rel, Claim::Legacy))
             .collect(),
     }

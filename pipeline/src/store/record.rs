@@ -116,7 +116,7 @@ pub fn utc_text(unix_s: u64) -> String {
 
 /// The name a file kept as changed had (`curve.edited-2.csv` →
 /// `curve.csv`, `fields.edited` → `fields`).
-fn unedited(name: &str) -> String {
+pub(super) fn unedited(name: &str) -> String {
     match name.find(".edited") {
         None => name.to_string(),
         Some(at) => {
