@@ -20,49 +20,36 @@ struct Floor {
     what: &'static str,
 }
 
-/// Moduli below 1 MPa and strengths below 1 kPa: no concrete, steel or
-/// bond has them.
+/// A modulus: below 1 MPa no concrete or steel has one.
+const fn modulus(key: &'static str) -> Floor {
+    Floor {
+        key,
+        dim: Dim::Stress,
+        min: 1e6,
+        suggestions: &[("GPa", 1e9), ("MPa", 1e6)],
+        typical: (1e8, 1e12),
+        what: "a modulus",
+    }
+}
+
+/// A strength: below 1 kPa no concrete, steel or bond has one.
+const fn strength(key: &'static str) -> Floor {
+    Floor {
+        key,
+        dim: Dim::Stress,
+        min: 1e3,
+        suggestions: &[("MPa", 1e6)],
+        typical: (1e4, 1e10),
+        what: "a strength",
+    }
+}
+
 const FLOORS: [Floor; 5] = [
-    Floor {
-        key: "materials.concrete.E",
-        dim: Dim::Stress,
-        min: 1e6,
-        suggestions: &[("GPa", 1e9), ("MPa", 1e6)],
-        typical: (1e8, 1e12),
-        what: "a modulus",
-    },
-    Floor {
-        key: "materials.steel.E",
-        dim: Dim::Stress,
-        min: 1e6,
-        suggestions: &[("GPa", 1e9), ("MPa", 1e6)],
-        typical: (1e8, 1e12),
-        what: "a modulus",
-    },
-    Floor {
-        key: "materials.concrete.ft",
-        dim: Dim::Stress,
-        min: 1e3,
-        suggestions: &[("MPa", 1e6)],
-        typical: (1e4, 1e10),
-        what: "a strength",
-    },
-    Floor {
-        key: "materials.steel.sigma_y",
-        dim: Dim::Stress,
-        min: 1e3,
-        suggestions: &[("MPa", 1e6)],
-        typical: (1e4, 1e10),
-        what: "a strength",
-    },
-    Floor {
-        key: "materials.interface.ft",
-        dim: Dim::Stress,
-        min: 1e3,
-        suggestions: &[("MPa", 1e6)],
-        typical: (1e4, 1e10),
-        what: "a strength",
-    },
+    modulus("materials.concrete.E"),
+    modulus("materials.steel.E"),
+    strength("materials.concrete.ft"),
+    strength("materials.steel.sigma_y"),
+    strength("materials.interface.ft"),
 ];
 
 /// The value written at a dotted key of the spec tree.
