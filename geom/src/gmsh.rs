@@ -8,6 +8,7 @@
 //! script: it is run with the `python` beside it, which also has gmsh's
 //! Python API (used for measurements on the OpenCASCADE model).
 
+use crate::capture::Capture;
 use std::ffi::{OsStr, OsString};
 use std::io::Read;
 use std::path::{Path, PathBuf};
@@ -291,6 +292,101 @@ impl Gmsh {
     }
 }
 
+/// A running child in its own process group, killed with its whole group
+/// (a wrapper script's children too) when dropped before it was reaped.
+struct Group {
+    child: std::process::Child,
+    reaped: bool,
+}
+
+impl Group {
+    fn spawn(cmd: &mut Command) -> std::io::Result<Group> {
+        #[cfg(unix)]
+        {
+            use std::os::unix::process::CommandExt;
+            // Its own group, so that a kill reaches every process it starts.
+            cmd.process_group(0);
+            #[cfg(target_os = "linux")]
+            // SAFETY: prctl is async-signal-safe and touches nothing of the
+            // parent's; it makes the kernel kill the child if ribbar dies
+            // (even by SIGKILL) before it, so that gmsh never outlives it.
+            unsafe {
+                cmd.pre_exec(|| {
+                    libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGKILL);
+                    Ok(())
+                });
+            }
+        }
+        Ok(Group {
+            child: cmd.spawn()?,
+            reaped: false,
+        })
+    }
+
+    /// Whether the child has ended, without reaping it: its pid (the
+    /// group's id) stays taken until [`Group::reap`], so a kill of the
+    /// group never reaches another process.
+    fn has_ended(&mut self) -> std::io::Result<bool> {
+        #[cfg(unix)]
+        {
+            // SAFETY: a zeroed siginfo_t is a valid out-parameter; waitid
+            // with WNOWAIT only reads the child's state.
+            let mut info: libc::siginfo_t = unsafe { std::mem::zeroed() };
+            let r = unsafe {
+                libc::waitid(
+                    libc::P_PID,
+                    self.child.id() as libc::id_t,
+                    &mut info,
+                    libc::WEXITED | libc::WNOHANG | libc::WNOWAIT,
+                )
+            };
+            if r != 0 {
+                return Err(std::io::Error::last_os_error());
+            }
+            // SAFETY: filled in by waitid for a child that changed state.
+            Ok(unsafe { info.si_pid() } != 0)
+        }
+        #[cfg(not(unix))]
+        {
+            Ok(self.child.try_wait()?.is_some())
+        }
+    }
+
+    /// Kills what is left of the group of an ended child (a wrapper's
+    /// children, which would also hold the pipes open) and reaps it.
+    fn reap(&mut self) -> std::io::Result<std::process::ExitStatus> {
+        self.signal_group();
+        self.reaped = true;
+        self.child.wait()
+    }
+
+    fn signal_group(&self) {
+        #[cfg(unix)]
+        if let Ok(pid) = i32::try_from(self.child.id()) {
+            // SAFETY: signals the group this process created, whose leader
+            // is not yet reaped; the group's id is the child's pid.
+            unsafe {
+                libc::kill(-pid, libc::SIGKILL);
+            }
+        }
+    }
+
+    fn kill(&mut self) {
+        self.signal_group();
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+        self.reaped = true;
+    }
+}
+
+impl Drop for Group {
+    fn drop(&mut self) {
+        if !self.reaped {
+            self.kill();
+        }
+    }
+}
+
 fn run_with_timeout(
     mut cmd: Command,
     workdir: Option<&Path>,
@@ -305,45 +401,36 @@ fn run_with_timeout(
         .stderr(Stdio::piped());
     let program: OsString = cmd.get_program().to_owned();
     let start = Instant::now();
-    let mut child = cmd.spawn().map_err(|source| GmshError::Spawn {
+    let mut group = Group::spawn(&mut cmd).map_err(|source| GmshError::Spawn {
         program: program.to_string_lossy().into_owned(),
         source,
     })?;
-    // Drain both pipes on threads so a chatty gmsh never blocks on a full pipe.
-    let mut out_pipe = child.stdout.take().expect("piped");
-    let mut err_pipe = child.stderr.take().expect("piped");
-    let out_t = std::thread::spawn(move || {
-        let mut s = Vec::new();
-        let _ = out_pipe.read_to_end(&mut s);
-        s
-    });
-    let err_t = std::thread::spawn(move || {
-        let mut s = Vec::new();
-        let _ = err_pipe.read_to_end(&mut s);
-        s
-    });
-    let status = loop {
-        match child.try_wait() {
-            Ok(Some(status)) => break status,
-            Ok(None) if start.elapsed() > timeout => {
-                let _ = child.kill();
-                let _ = child.wait();
+    // Drain both pipes on threads so a chatty gmsh never blocks on a full
+    // pipe; each keeps a bounded part of what it reads.
+    let out_pipe = group.child.stdout.take().expect("piped");
+    let err_pipe = group.child.stderr.take().expect("piped");
+    let out_t = std::thread::spawn(move || Capture::read_all(out_pipe));
+    let err_t = std::thread::spawn(move || Capture::read_all(err_pipe));
+    let ended = loop {
+        match group.has_ended() {
+            Ok(true) => break group.reap(),
+            Ok(false) if start.elapsed() > timeout => {
+                group.kill();
                 return Err(GmshError::Timeout {
                     args: shown.to_string(),
                     secs: timeout.as_secs_f64(),
                 });
             }
-            Ok(None) => std::thread::sleep(Duration::from_millis(20)),
-            Err(source) => {
-                return Err(GmshError::Spawn {
-                    program: program.to_string_lossy().into_owned(),
-                    source,
-                })
-            }
+            Ok(false) => std::thread::sleep(Duration::from_millis(20)),
+            Err(source) => break Err(source),
         }
     };
-    let stdout = String::from_utf8_lossy(&out_t.join().unwrap_or_default()).into_owned();
-    let stderr = String::from_utf8_lossy(&err_t.join().unwrap_or_default()).into_owned();
+    let status = ended.map_err(|source| GmshError::Spawn {
+        program: program.to_string_lossy().into_owned(),
+        source,
+    })?;
+    let stdout = out_t.join().map(|c| c.text()).unwrap_or_default();
+    let stderr = err_t.join().map(|c| c.text()).unwrap_or_default();
     let elapsed = start.elapsed();
     if !status.success() {
         let msg = if stderr.trim().is_empty() {
@@ -373,6 +460,37 @@ pub fn tail(text: &str, n: usize) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Whether a process runs `sleep <seconds>` (its command line in /proc).
+    fn sleeping(seconds: &str) -> bool {
+        let wanted = format!("sleep\0{seconds}\0");
+        std::fs::read_dir("/proc").unwrap().any(|e| {
+            let path = e.unwrap().path().join("cmdline");
+            std::fs::read(path).is_ok_and(|c| c == wanted.as_bytes())
+        })
+    }
+
+    /// A child that outlives its limit is killed with every process it
+    /// started (a wrapper's children included), and so is what a child
+    /// that ended left running (it would hold the pipes open).
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn a_timed_out_child_is_killed_with_its_whole_group() {
+        let tag = format!("{}.{}", 7000 + std::process::id() % 1000, 1);
+        let mut cmd = Command::new("sh");
+        cmd.args(["-c", &format!("sleep {tag} & sleep {tag}; echo never")]);
+        let err = run_with_timeout(cmd, None, Duration::from_millis(300), "hang").unwrap_err();
+        assert!(matches!(err, GmshError::Timeout { .. }), "{err}");
+        std::thread::sleep(Duration::from_millis(100));
+        assert!(!sleeping(&tag), "sleep {tag} outlived the kill");
+        let tag = format!("{}.{}", 7000 + std::process::id() % 1000, 2);
+        let mut cmd = Command::new("sh");
+        cmd.args(["-c", &format!("sleep {tag} & echo done")]);
+        let out = run_with_timeout(cmd, None, Duration::from_secs(30), "bg").unwrap();
+        assert_eq!(out.stdout.trim(), "done");
+        std::thread::sleep(Duration::from_millis(100));
+        assert!(!sleeping(&tag), "sleep {tag} outlived its parent");
+    }
 
     /// Version strings from both the wheel and Debian's gmsh parse (SPEC §4: version checked).
     #[test]

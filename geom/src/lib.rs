@@ -10,6 +10,7 @@
 //! ```
 
 pub mod build;
+pub mod capture;
 pub mod diagnose;
 pub mod fsutil;
 pub mod geo;

@@ -20,6 +20,7 @@
 pub mod build;
 pub mod crack;
 pub mod error;
+pub mod estimate;
 pub mod gmsh_run;
 pub mod half_turn;
 pub mod model;

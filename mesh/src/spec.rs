@@ -20,6 +20,10 @@ pub const DEFAULT_H_INTERFACE: f64 = 0.4e-3;
 pub const DEFAULT_H_OUTER: f64 = 5e-3;
 /// Default wall-clock limit for one gmsh run: 600 s.
 pub const DEFAULT_TIMEOUT: f64 = 600.0;
+/// The default of `mesh.max_elements` (`crate::estimate`): ten million
+/// tetrahedra, past what the solver's direct factorisation holds in memory
+/// on a workstation (R2's paper mesh, the largest shipped, has 2.3 million).
+pub const DEFAULT_MAX_ELEMENTS: f64 = 1e7;
 
 /// gmsh's 3D meshing algorithm (`Mesh.Algorithm3D`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
@@ -116,6 +120,9 @@ pub struct RawMeshSpec {
     /// the whole, with `unfolded_from`; no effect on a whole part (bool;
     /// default false).
     pub unfold: Option<bool>,
+    /// The most tetrahedra the size field may give (estimated before
+    /// meshing; default 1e7).
+    pub max_elements: Option<f64>,
 }
 
 /// The resolved `mesh` section, SI units.
@@ -151,6 +158,15 @@ pub struct MeshSpec {
     /// meshes keep their cache keys.
     #[serde(default, skip_serializing_if = "is_false")]
     pub unfold: bool,
+    /// The most tetrahedra the size field may give
+    /// (`crate::estimate::check_size`). A bound, not an input of the mesh:
+    /// left out of the serialised spec, so that it is in no key.
+    #[serde(skip_serializing, default = "default_max_elements")]
+    pub max_elements: f64,
+}
+
+fn default_max_elements() -> f64 {
+    DEFAULT_MAX_ELEMENTS
 }
 
 fn is_false(v: &bool) -> bool {
@@ -169,6 +185,7 @@ impl Default for MeshSpec {
             threads: 1,
             timeout: DEFAULT_TIMEOUT,
             unfold: false,
+            max_elements: default_max_elements(),
         }
     }
 }
@@ -232,6 +249,13 @@ impl RawMeshSpec {
         if timeout <= 0.0 {
             return Err(bad("timeout", format!("must be > 0 s, got {timeout} s")));
         }
+        let max_elements = self.max_elements.unwrap_or(d.max_elements);
+        if max_elements.is_nan() || max_elements < 1.0 {
+            return Err(bad(
+                "max_elements",
+                format!("must be ≥ 1, got {max_elements}"),
+            ));
+        }
         let threads = self.threads.unwrap_or(d.threads);
         if threads == 0 {
             return Err(bad("threads", "must be ≥ 1".to_string()));
@@ -252,6 +276,7 @@ impl RawMeshSpec {
             threads,
             timeout,
             unfold: self.unfold.unwrap_or(d.unfold),
+            max_elements,
         })
     }
 }

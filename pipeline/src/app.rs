@@ -18,16 +18,10 @@ use std::process::ExitCode;
 /// then one `  caused by: ` line per cause that the message above it does
 /// not already end with.
 pub fn error_report(err: &anyhow::Error) -> String {
-    let mut text = format!("{ERROR_PREFIX}{err}");
-    let mut previous = err.to_string();
-    for cause in err.chain().skip(1) {
-        let cause = cause.to_string();
-        // Errors that print their source as part of their own message
-        // (`{path}: {source}`) would otherwise say it twice.
-        if !previous.ends_with(&cause) {
-            text.push_str(&format!("\n{CAUSE_PREFIX}{cause}"));
-        }
-        previous = cause;
+    let lines = crate::child::error_lines(err);
+    let mut text = format!("{ERROR_PREFIX}{}", lines[0]);
+    for cause in &lines[1..] {
+        text.push_str(&format!("\n{CAUSE_PREFIX}{cause}"));
     }
     text
 }
@@ -96,6 +90,7 @@ fn dispatch(command: Command, printer: &Printer) -> Result<ExitCode> {
         Command::Status(a) => status(&a),
         Command::Estimate(a) => crate::commands::estimate(&a),
         Command::Clean(a) => crate::commands::clean(&a, printer),
+        Command::Verify(a) => crate::verify::run(&a, printer),
         Command::Material(a) => crate::commands::material(&a),
         Command::Study(a) => crate::study_run::run(&a, printer),
         Command::Bench(a) => crate::bench::run(&a, printer),
@@ -113,6 +108,7 @@ fn run_stages(
     printer: &Printer,
 ) -> Result<ExitCode> {
     let scene = Scene::load(&args.spec, &args.overrides)?;
+    refuse_spec_among_outputs(args, &scene)?;
     match crate::commands::run_scene_stages(&scene, &args.work, stages, printer)? {
         None => {}
         Some(stopped) if allow_stopped => {
@@ -124,39 +120,67 @@ fn run_stages(
     Ok(ExitCode::SUCCESS)
 }
 
+/// A spec inside the store, or at the place of one of the files its run
+/// publishes, would be overwritten or removed by the run.
+fn refuse_spec_among_outputs(args: &SceneArgs, scene: &Scene) -> Result<()> {
+    let store = Store::new(&args.work);
+    let dir = store.scene_dir(&scene.name);
+    let published: Vec<std::path::PathBuf> = Stage::ALL
+        .iter()
+        .flat_map(|s| s.published_files().iter().map(|f| dir.join(f)))
+        .chain([dir.join(crate::store::RECORD_FILE)])
+        .collect();
+    crate::inputs::refuse_input_among_outputs(
+        "the spec",
+        &args.spec,
+        &[store.work.join(".store")],
+        &published,
+    )
+}
+
 fn status(args: &SceneArgs) -> Result<ExitCode> {
     let scene = Scene::load(&args.spec, &args.overrides)?;
     let gmsh = geom::gmsh::Gmsh::locate().context("status needs gmsh's version for the keys")?;
     let keys = Keys::of(&scene, gmsh.version());
     let store = Store::new(&args.work);
     let mut out = std::io::stdout().lock();
+    for warning in crate::plausibility::warnings(&scene) {
+        writeln!(out, "warning: {warning}")?;
+    }
     let mut all_done = true;
     for (stage, st) in stage::status(&store, &scene, &keys)? {
-        let text = match &st {
-            StageStatus::UpToDate => "up to date".to_string(),
-            StageStatus::Missing => "missing".to_string(),
-            StageStatus::Interrupted => "interrupted: `ribbar run` resumes it".to_string(),
-            StageStatus::Stale(changed) if changed.is_empty() => {
-                "stale (upstream changed)".to_string()
-            }
-            StageStatus::Stale(changed) => format!(
-                "stale: changed {}",
-                changed
-                    .iter()
-                    .map(|k| if Stage::from_name(k).is_some() {
-                        format!("{k} (upstream stage)")
-                    } else {
-                        k.clone()
-                    })
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            ),
-        };
         all_done &= st == StageStatus::UpToDate;
-        writeln!(out, "{:<9} {}", stage, text)?;
+        writeln!(out, "{:<9} {}", stage, status_text(&st))?;
     }
     if all_done {
         writeln!(out, "every stage is up to date")?;
     }
+    for line in stage::folder_report(&store, &scene, &keys)? {
+        writeln!(out, "results   {line}")?;
+    }
     Ok(ExitCode::SUCCESS)
+}
+
+fn status_text(st: &StageStatus) -> String {
+    match st {
+        StageStatus::UpToDate => "up to date".to_string(),
+        StageStatus::Missing => "missing".to_string(),
+        StageStatus::Interrupted => "interrupted: `ribbar run` resumes it".to_string(),
+        StageStatus::Damaged(why) => {
+            format!("damaged: {why}; `ribbar run` moves it to the quarantine and computes it again")
+        }
+        StageStatus::Stale(changed) if changed.is_empty() => "stale (upstream changed)".to_string(),
+        StageStatus::Stale(changed) => format!(
+            "stale: changed {}",
+            changed
+                .iter()
+                .map(|k| if Stage::from_name(k).is_some() {
+                    format!("{k} (upstream stage)")
+                } else {
+                    k.clone()
+                })
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+    }
 }

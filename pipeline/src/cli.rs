@@ -65,8 +65,10 @@ pub enum Command {
     Status(SceneArgs),
     /// What the scene's solve will take (memory, run time), from its mesh: JSON.
     Estimate(EstimateArgs),
-    /// Remove the scene's results (and, with --all, the whole store).
+    /// Remove what ribbar made of the scene's results and its in-progress stages (and, with --all, the whole store).
     Clean(CleanArgs),
+    /// Check every stored result against its recorded digests (and a scene's results folder); move damaged ones aside.
+    Verify(VerifyArgs),
     /// Drive one material point along a loading path (like MFront's mtest).
     Material(MaterialArgs),
     /// Run a study: a base spec with lists of values, or a convergence series over a mesh or step size.
@@ -153,6 +155,16 @@ pub struct CleanArgs {
 }
 
 #[derive(Debug, Args)]
+pub struct VerifyArgs {
+    /// Scene spec: check only its stages and results folder (default: the whole store).
+    pub spec: Option<PathBuf>,
+    #[arg(long, default_value = "ribbar-work")]
+    pub work: PathBuf,
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub overrides: Vec<String>,
+}
+
+#[derive(Debug, Args)]
 pub struct CompareArgs {
     /// The run compared: its curve.csv (or the scene directory holding it).
     pub test: PathBuf,
@@ -161,6 +173,10 @@ pub struct CompareArgs {
     /// Abscissa of the comparison: free-end displacement or imposed displacement.
     #[arg(long, value_enum, default_value = "fed")]
     pub along: CompareAxis,
+    /// Compare curves that end far apart (one under 90 % of the other's
+    /// range) over their common range instead of refusing them.
+    #[arg(long)]
+    pub common_range: bool,
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum, PartialEq, Eq)]

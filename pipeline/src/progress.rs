@@ -3,7 +3,9 @@
 //! everything but errors, `-v` adds detail.
 
 use std::io::{IsTerminal, Write};
+use std::sync::mpsc;
 use std::sync::Mutex;
+use std::time::{Duration, Instant};
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Verbosity {
@@ -84,5 +86,42 @@ impl Printer {
             let _ = writeln!(std::io::stderr());
             *last = false;
         }
+    }
+
+    /// Runs `work`, showing `what(elapsed)` while it runs: every second in
+    /// place on a terminal; in a log at 5, 10, 20, 40, … s, so that a long
+    /// gmsh run says it is alive without filling the log.
+    pub fn while_running<T>(
+        &self,
+        what: impl Fn(Duration) -> String + Sync,
+        work: impl FnOnce() -> T,
+    ) -> T {
+        if self.verbosity == Verbosity::Quiet {
+            return work();
+        }
+        let started = Instant::now();
+        let (stop, stopped) = mpsc::channel::<()>();
+        let what = &what;
+        std::thread::scope(|s| {
+            s.spawn(move || {
+                let mut next = if self.terminal { 1.0 } else { 5.0 };
+                loop {
+                    let wait = Duration::from_secs_f64(next).saturating_sub(started.elapsed());
+                    match stopped.recv_timeout(wait) {
+                        Err(mpsc::RecvTimeoutError::Timeout) => {}
+                        _ => break,
+                    }
+                    self.progress(&what(started.elapsed()));
+                    next = if self.terminal {
+                        next + 1.0
+                    } else {
+                        next * 2.0
+                    };
+                }
+            });
+            let out = work();
+            let _ = stop.send(());
+            out
+        })
     }
 }

@@ -187,10 +187,13 @@ fn with_override(key: &str, message: String, overrides: &[String]) -> String {
 impl Scene {
     /// Reads `path`, applies `overrides` (`key.path=value`), resolves.
     pub fn load(path: &Path, overrides: &[String]) -> Result<Scene, SceneError> {
-        let text = std::fs::read_to_string(path).map_err(|source| SceneError::Read {
-            path: path.to_path_buf(),
-            source,
-        })?;
+        let text =
+            geom::fsutil::read_capped(path, geom::fsutil::MAX_SPEC_BYTES).map_err(|source| {
+                SceneError::Read {
+                    path: path.to_path_buf(),
+                    source,
+                }
+            })?;
         Self::from_yaml(&text, path, overrides)
     }
 
@@ -253,6 +256,9 @@ impl RawScene {
         let materials = self.materials.resolve()?;
         let solver = self.solver_for(&materials).resolve()?;
         averaging_is_staggered(&materials, &solver)?;
+        let mesh = self.mesh.resolve()?;
+        // Before any work: a mesh far finer than meant is refused here.
+        mesh::estimate::check_size(&bar, &geometry, &mesh)?;
         Ok(Scene {
             name: self.name.clone(),
             bar,
@@ -260,7 +266,7 @@ impl RawScene {
                 geometry,
                 non_adhesive: self.non_adhesive.unwrap_or_default(),
             },
-            mesh: self.mesh.resolve()?,
+            mesh,
             materials,
             loading: self.loading.resolve(&self.solver)?,
             solver,

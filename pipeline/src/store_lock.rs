@@ -64,9 +64,25 @@ pub enum LockError {
 /// process holds the record lock on it; writes `host pid` into the file
 /// (who holds it, for a person looking at a lock that waits).
 pub fn lock_exclusive(path: &Path) -> Result<FileLock, LockError> {
+    Ok(take(path, true)?.expect("a waiting lock is always taken"))
+}
+
+/// The lock on `path` if no thread or process holds it now, `None` if one
+/// does: for `ribbar clean` and `ribbar verify`, which skip a key that a
+/// running stage works on rather than wait for it.
+pub fn try_lock_exclusive(path: &Path) -> Result<Option<FileLock>, LockError> {
+    take(path, false)
+}
+
+/// Takes the lock on `path`, waiting for it if `wait`, else `None` when
+/// another thread or process holds it.
+fn take(path: &Path, wait: bool) -> Result<Option<FileLock>, LockError> {
     {
         let mut held = HELD.lock().unwrap_or_else(|e| e.into_inner());
         while held.get_or_insert_with(HashSet::new).contains(path) {
+            if !wait {
+                return Ok(None);
+            }
             held = RELEASED.wait(held).unwrap_or_else(|e| e.into_inner());
         }
         held.get_or_insert_with(HashSet::new)
@@ -88,22 +104,28 @@ pub fn lock_exclusive(path: &Path) -> Result<FileLock, LockError> {
         .write(true)
         .open(path)
         .map_err(io)?;
-    record_lock(&file).map_err(|source| match source.raw_os_error() {
-        Some(libc::ENOLCK | libc::ENOSYS | libc::EOPNOTSUPP | libc::EINVAL) => {
-            LockError::Unsupported {
-                path: path.to_path_buf(),
-                source,
-            }
+    match record_lock(&file, wait) {
+        Ok(true) => {}
+        Ok(false) => return Ok(None),
+        Err(source) => {
+            return Err(match source.raw_os_error() {
+                Some(libc::ENOLCK | libc::ENOSYS | libc::EOPNOTSUPP | libc::EINVAL) => {
+                    LockError::Unsupported {
+                        path: path.to_path_buf(),
+                        source,
+                    }
+                }
+                _ => io(source),
+            })
         }
-        _ => io(source),
-    })?;
+    }
     let holder = format!("{} {}\n", hostname(), std::process::id());
     // Who holds it is a courtesy: a failure to say so does not matter.
     let _ = file
         .set_len(0)
         .and_then(|()| (&file).write_all(holder.as_bytes()));
     lock.file = Some(file);
-    Ok(lock)
+    Ok(Some(lock))
 }
 
 impl FileLock {
@@ -135,20 +157,25 @@ impl FileLock {
     }
 }
 
-/// `fcntl(F_SETLKW)` on the whole file, retried when a signal interrupts it.
-fn record_lock(file: &File) -> std::io::Result<()> {
+/// `fcntl` on the whole file: `F_SETLKW` (waits) when `wait`, else
+/// `F_SETLK`, whose `Ok(false)` is another process holding it. Retried when
+/// a signal interrupts it.
+fn record_lock(file: &File, wait: bool) -> std::io::Result<bool> {
     let mut request: libc::flock = unsafe { std::mem::zeroed() };
     request.l_type = libc::F_WRLCK as libc::c_short;
     request.l_whence = libc::SEEK_SET as libc::c_short;
     request.l_start = 0;
     request.l_len = 0; // to the end of the file, however long it grows
+    let command = if wait { libc::F_SETLKW } else { libc::F_SETLK };
     loop {
-        if unsafe { libc::fcntl(file.as_raw_fd(), libc::F_SETLKW, &request) } == 0 {
-            return Ok(());
+        if unsafe { libc::fcntl(file.as_raw_fd(), command, &request) } == 0 {
+            return Ok(true);
         }
         let e = std::io::Error::last_os_error();
-        if e.kind() != std::io::ErrorKind::Interrupted {
-            return Err(e);
+        match e.raw_os_error() {
+            Some(libc::EAGAIN | libc::EACCES) if !wait => return Ok(false),
+            _ if e.kind() == std::io::ErrorKind::Interrupted => {}
+            _ => return Err(e),
         }
     }
 }
@@ -219,6 +246,22 @@ mod tests {
         let err = lock.verify().unwrap_err().to_string();
         assert!(err.contains("`elsewhere 1` took this lock"), "{err}");
         drop(lock);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// A key held by this process is not taken again by a non-waiting
+    /// lock, and is taken once released.
+    #[test]
+    fn a_held_lock_is_not_taken_without_waiting() {
+        let dir = std::env::temp_dir().join(format!("ribbar-trylock-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("k.lock");
+        let held = lock_exclusive(&path).unwrap();
+        assert!(try_lock_exclusive(&path).unwrap().is_none());
+        drop(held);
+        let again = try_lock_exclusive(&path).unwrap();
+        assert!(again.is_some());
+        again.unwrap().verify().unwrap();
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }

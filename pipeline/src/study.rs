@@ -77,6 +77,30 @@ pub struct RawStudy {
     #[serde(default)]
     #[schemars(with = "BTreeMap<String, serde_json::Value>")]
     pub set: BTreeMap<String, serde_yaml::Value>,
+    /// The most cases the study may expand to (default
+    /// [`DEFAULT_MAX_CASES`]); a larger product is refused before it is
+    /// expanded.
+    #[serde(default)]
+    pub max_cases: Option<usize>,
+}
+
+/// The most cases a study expands to unless its `max_cases` says more:
+/// each case is a whole pull-out run, and a product of a few long lists
+/// quickly reaches millions.
+pub const DEFAULT_MAX_CASES: usize = 1000;
+
+/// Refuses a study of `cases` cases (`None`: more than a `usize` holds)
+/// above its limit, with the count and how it arose, before any case is
+/// built.
+pub fn check_case_count(cases: Option<usize>, how: &str, max_cases: usize) -> Result<(), String> {
+    match cases {
+        Some(n) if n <= max_cases => Ok(()),
+        _ => Err(format!(
+            "parameters: the study expands to {} cases ({how}), more than max_cases = \
+             {max_cases}; raise max_cases in the study file if that many runs are meant",
+            cases.map_or("more than 2^64".to_string(), |n| n.to_string())
+        )),
+    }
 }
 
 /// One case of a study.
@@ -137,10 +161,13 @@ impl RawStudy {
 
 impl Study {
     pub fn load(path: &Path) -> Result<Study, StudyError> {
-        let text = std::fs::read_to_string(path).map_err(|source| StudyError::Read {
-            path: path.to_path_buf(),
-            source,
-        })?;
+        let text =
+            geom::fsutil::read_capped(path, geom::fsutil::MAX_SPEC_BYTES).map_err(|source| {
+                StudyError::Read {
+                    path: path.to_path_buf(),
+                    source,
+                }
+            })?;
         let invalid = |message: String| StudyError::Invalid {
             path: path.to_path_buf(),
             message,
@@ -162,6 +189,9 @@ impl Study {
             return Err(invalid(format!("base: {} is not a file", base.display())));
         }
         let (keys, lists) = parameter_lists(&raw, &invalid)?;
+        let (count, how) = case_count(raw.combine, &lists);
+        check_case_count(count, &how, raw.max_cases.unwrap_or(DEFAULT_MAX_CASES))
+            .map_err(invalid)?;
         let combos = combinations(raw.combine, &keys, &lists, &invalid)?;
         let shared: Vec<String> = raw
             .set
@@ -268,6 +298,22 @@ pub fn size_of(key: &str, value: &serde_yaml::Value) -> Result<f64, String> {
         Ok(h)
     } else {
         Err(bad(format!("{h} m")))
+    }
+}
+
+/// How many cases the lists make, and how (`10 × 10 × …`); `None` when
+/// the product overflows.
+fn case_count(combine: Combine, lists: &[Vec<serde_yaml::Value>]) -> (Option<usize>, String) {
+    let lengths: Vec<String> = lists.iter().map(|l| l.len().to_string()).collect();
+    match combine {
+        Combine::Zip => (
+            Some(lists[0].len()),
+            format!("{} zipped values", lists[0].len()),
+        ),
+        Combine::Product => (
+            lists.iter().try_fold(1usize, |n, l| n.checked_mul(l.len())),
+            format!("the product {} of the lists' lengths", lengths.join(" × ")),
+        ),
     }
 }
 
@@ -380,6 +426,41 @@ mod tests {
             err.contains("parameters.solver.impl_ex_tolerance") && err.contains("length"),
             "{err}"
         );
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// A product of six 10-value lists (10^6 cases) is refused with its
+    /// count before it is expanded; `max_cases` raises the limit.
+    #[test]
+    fn a_study_too_large_is_refused_before_it_is_expanded() {
+        let dir = std::env::temp_dir().join(format!("ribbar-study-big-{}", std::process::id()));
+        write(&dir, "base.yaml", "name: b\n");
+        let list = "[0.11, 0.12, 0.13, 0.14, 0.15, 0.16, 0.17, 0.18, 0.19, 0.2]";
+        let params: String = ["a", "b", "c", "d", "e", "f"]
+            .iter()
+            .map(|k| format!("  {k}: {list}\n"))
+            .collect();
+        let p = write(
+            &dir,
+            "big.yaml",
+            &format!("name: big\nbase: base.yaml\nparameters:\n{params}"),
+        );
+        let err = Study::load(&p).unwrap_err().to_string();
+        assert!(
+            err.contains("1000000 cases")
+                && err.contains("10 × 10 × 10 × 10 × 10 × 10")
+                && err.contains("max_cases = 1000"),
+            "{err}"
+        );
+        let p = write(
+            &dir,
+            "raised.yaml",
+            "name: r\nbase: base.yaml\nmax_cases: 2000\nparameters:\n  a: [1, 2]\n  b: [1, 2]\n",
+        );
+        assert_eq!(Study::load(&p).unwrap().cases.len(), 4);
+        assert!(check_case_count(None, "x", 10)
+            .unwrap_err()
+            .contains("2^64"));
         std::fs::remove_dir_all(&dir).unwrap();
     }
 

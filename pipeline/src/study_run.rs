@@ -8,6 +8,7 @@ use crate::cli::StudyArgs;
 use crate::post::{self, ConvergenceStudy, CurveRow, GridResult, StudyCase};
 use crate::progress::Printer;
 use crate::study::{Case, Study, StudyKind};
+use crate::study_outcome::{summary_line, CaseFailure, CaseOutcome};
 use anyhow::{bail, Context, Result};
 use std::path::Path;
 use std::process::{Command, ExitCode, Stdio};
@@ -63,8 +64,9 @@ fn child_error(log: &Path) -> Option<String> {
 
 /// Nodes of a case's mesh, from its published mesh.json.
 fn case_dofs(work: &Path, case: &Case) -> Option<f64> {
-    let text = std::fs::read(work.join(&case.name).join("mesh.json")).ok()?;
-    let v: serde_json::Value = serde_json::from_slice(&text).ok()?;
+    let path = work.join(&case.name).join("mesh.json");
+    let text = geom::fsutil::read_capped(&path, geom::fsutil::MAX_RECORD_BYTES).ok()?;
+    let v: serde_json::Value = serde_json::from_str(&text).ok()?;
     Some(3.0 * v.get("nodes")?.as_f64()?)
 }
 
@@ -105,9 +107,39 @@ fn pool<T: Sync>(
     });
 }
 
+/// What a study writes into `WORK/<study>/`, besides its cases' folders.
+const STUDY_OUTPUTS: [&str; 11] = [
+    "table.csv",
+    "table.md",
+    "bond_slip.png",
+    "bond_slip.svg",
+    "convergence.csv",
+    "convergence.md",
+    "curve_distances.csv",
+    "error_vs_time.png",
+    "error_vs_time.svg",
+    "Snakefile",
+    "logs",
+];
+
+/// The study file and its base spec must not be among what the study
+/// writes (its own folder's outputs, the store).
+fn refuse_inputs_among_outputs(study: &Study, args: &StudyArgs, out: &Path) -> Result<()> {
+    let outputs: Vec<std::path::PathBuf> = STUDY_OUTPUTS.iter().map(|f| out.join(f)).collect();
+    let store = [args.work.join(".store")];
+    crate::inputs::refuse_input_among_outputs("the study file", &args.study, &store, &outputs)?;
+    crate::inputs::refuse_input_among_outputs(
+        "the study's base spec",
+        &study.base,
+        &store,
+        &outputs,
+    )
+}
+
 pub fn run(args: &StudyArgs, printer: &Printer) -> Result<ExitCode> {
     let study = Study::load(&args.study)?;
     let out = args.work.join(&study.name);
+    refuse_inputs_among_outputs(&study, args, &out)?;
     std::fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
     if let Some(crate::cli::ExportFormat::Snakemake) = args.export {
         let dir = args
@@ -126,7 +158,7 @@ pub fn run(args: &StudyArgs, printer: &Printer) -> Result<ExitCode> {
         return Ok(ExitCode::SUCCESS);
     }
     if args.collect {
-        collect(&study, &args.work, &out, printer)?;
+        collect(&study, &args.work, &out, &[], printer)?;
         for case in &study.cases {
             let solve_json = args.work.join(&case.name).join("solve.json");
             if let Some(why) = crate::commands::incomplete_solve(&solve_json) {
@@ -145,16 +177,17 @@ pub fn run(args: &StudyArgs, printer: &Printer) -> Result<ExitCode> {
         args.jobs
     ));
 
-    let failed = Mutex::new(Vec::<(String, String)>::new());
-    let fail = |case: &Case, stage: &str, log: &Path| {
-        let why = match child_error(log) {
-            Some(e) => format!("{stage} failed: {e} (log {})", log.display()),
-            None => format!("{stage} failed, see {}", log.display()),
+    let failed = Mutex::new(Vec::<(String, CaseFailure)>::new());
+    let fail = |case: &Case, command: &str, log: &Path| {
+        let failure = CaseFailure {
+            command: command.to_string(),
+            cause: child_error(log),
+            log: log.to_path_buf(),
         };
         failed
             .lock()
             .unwrap_or_else(|e| e.into_inner())
-            .push((case.name.clone(), why));
+            .push((case.name.clone(), failure));
     };
     // Meshes first: gmsh's memory is small, and the mesh sizes tell the
     // solves' memory.
@@ -197,43 +230,71 @@ pub fn run(args: &StudyArgs, printer: &Printer) -> Result<ExitCode> {
             }
         },
     );
-    collect(&study, &args.work, &out, printer)?;
     let failed = failed.into_inner().unwrap_or_else(|e| e.into_inner());
-    for (name, why) in &failed {
-        printer.line(&format!("[{name}] {why}"));
+    for (name, failure) in &failed {
+        printer.line(&format!("[{name}] {}", failure.describe()));
     }
-    if failed.is_empty() {
+    let outcomes = collect(&study, &args.work, &out, &failed, printer)?;
+    let unfinished = outcomes
+        .iter()
+        .filter(|o| matches!(o, CaseOutcome::Stopped { .. } | CaseOutcome::Failed { .. }))
+        .count();
+    if unfinished == 0 {
         Ok(ExitCode::SUCCESS)
     } else {
         bail!(
-            "{} of {} cases failed (their logs are named above); the others' results are kept",
-            failed.len(),
+            "{unfinished} of {} cases failed or stopped early (their logs are named above and \
+             in the table); the others' results are kept",
             study.cases.len()
         )
     }
 }
 
-/// Tables and plots of every case that has published a summary.
-pub fn collect(study: &Study, work: &Path, out: &Path, printer: &Printer) -> Result<()> {
+/// Tables and plots of the study: a row for every case (`failures`: the
+/// cases whose child failed), with how it ended, the results of each case
+/// that has them; returns each case's outcome, in the study's order.
+pub fn collect(
+    study: &Study,
+    work: &Path,
+    out: &Path,
+    failures: &[(String, CaseFailure)],
+    printer: &Printer,
+) -> Result<Vec<CaseOutcome>> {
     let mut curves: Vec<(String, Vec<CurveRow>)> = Vec::new();
     let mut cases: Vec<StudyCase> = Vec::new();
     let mut grids: Vec<(f64, serde_json::Value)> = Vec::new();
+    let mut outcomes = Vec::new();
     for case in &study.cases {
         let dir = work.join(&case.name);
-        let (Ok(rows), Ok(summary)) = (
-            post::read_curve_csv(&dir.join("curve.csv")),
-            std::fs::read(dir.join("summary.json")),
-        ) else {
+        let failure = failures
+            .iter()
+            .find(|(n, _)| *n == case.name)
+            .map(|(_, f)| f);
+        let outcome = CaseOutcome::of_case(work, &case.name, failure);
+        let results = outcome.has_results().then(|| {
+            let read = |name: &str| {
+                geom::fsutil::read_capped(&dir.join(name), geom::fsutil::MAX_TABLE_BYTES)
+            };
+            (
+                read("curve.csv").map(|text| post::parse_curve_csv(&text, &dir.join("curve.csv"))),
+                read("summary.json"),
+            )
+        });
+        let Some((Ok(Ok(rows)), Ok(summary))) = results else {
+            let mut row =
+                StudyCase::from_summary(&case.name, &case.parameters, &serde_json::Value::Null);
+            outcome.prepend_to(&mut row);
+            cases.push(row);
+            outcomes.push(outcome);
             continue;
         };
-        let summary: serde_json::Value = serde_json::from_slice(&summary)
+        let summary: serde_json::Value = serde_json::from_str(&summary)
             .with_context(|| format!("{}: not valid JSON", dir.join("summary.json").display()))?;
         let label = post::parameters_label(&case.parameters);
-        cases.push(StudyCase::from_summary(
-            &case.name,
-            &case.parameters,
-            &summary,
-        ));
+        let mut row = StudyCase::from_summary(&case.name, &case.parameters, &summary);
+        outcome.prepend_to(&mut row);
+        cases.push(row);
+        outcomes.push(outcome);
         if study.kind == StudyKind::Convergence {
             let (key, value) = &case.parameters[0];
             let h = crate::study::size_of(key, value).map_err(anyhow::Error::msg)?;
@@ -241,10 +302,25 @@ pub fn collect(study: &Study, work: &Path, out: &Path, printer: &Printer) -> Res
         }
         curves.push((label, rows));
     }
-    if cases.is_empty() {
-        bail!("no case of study {} has results", study.name);
-    }
     post::write_study_tables(&cases, &out.join("table.csv"), &out.join("table.md"))?;
+    printer.line(&summary_line(&study.name, &outcomes));
+    if curves.is_empty() {
+        let first = outcomes
+            .iter()
+            .find_map(|o| match o {
+                CaseOutcome::Failed { stage, cause, log } => Some(format!(
+                    "the first failed in {stage}: {cause} (log {})",
+                    log.display()
+                )),
+                _ => None,
+            })
+            .unwrap_or_default();
+        bail!(
+            "no case of study {} has results; {first}; every case's row is in {}",
+            study.name,
+            out.join("table.csv").display()
+        );
+    }
     let refs: Vec<(&str, &[CurveRow])> = curves
         .iter()
         .map(|(l, r)| (l.as_str(), r.as_slice()))
@@ -266,7 +342,7 @@ pub fn collect(study: &Study, work: &Path, out: &Path, printer: &Printer) -> Res
         }
     }
     printer.line(&format!("study tables and plots: {}", out.display()));
-    Ok(())
+    Ok(outcomes)
 }
 
 /// The quantities a convergence study estimates, as (name, pointer into

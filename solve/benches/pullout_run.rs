@@ -21,6 +21,9 @@ use solve::spec::materials::NonAdhesive;
 use solve::spec::materials::RawMaterials;
 use solve::spec::solver::{RawLoading, RawSolver};
 
+/// The key the benchmark saves its checkpoints with and resumes them by.
+const BENCH_KEY: &str = "pullout-run-bench";
+
 /// Prints each step; the GMRES iterations and factorisations of a step come
 /// from the running summary (read through a checkpoint, a few ms per step).
 #[derive(Default)]
@@ -36,7 +39,7 @@ impl Observer for Print {
         let cp = (v.checkpoint)();
         if let Some((n, path)) = &self.save {
             if *n == r.row.step {
-                cp.save(path).expect("checkpoint");
+                cp.save(path, BENCH_KEY).expect("checkpoint");
             }
         }
         let s = cp.state.summary;
@@ -128,11 +131,13 @@ fn main() {
     let mut resume = None;
     match (opt("save_at"), opt("checkpoint")) {
         (Some(n), Some(p)) => print.save = Some((n.parse().expect("bench.save_at"), p.into())),
-        (None, Some(p)) => resume = Some(Checkpoint::load(p.as_ref()).expect("checkpoint")),
+        (None, Some(p)) => {
+            resume = Some(Checkpoint::load(p.as_ref(), BENCH_KEY).expect("checkpoint"))
+        }
         _ => {}
     }
     if let Some(p) = opt("resume") {
-        resume = Some(Checkpoint::load(p.as_ref()).expect("bench.resume"));
+        resume = Some(Checkpoint::load(p.as_ref(), BENCH_KEY).expect("bench.resume"));
     }
     let res = solve_pullout(&model, &laws, &loading, &settings, resume, &mut print);
     let summary = match &res {

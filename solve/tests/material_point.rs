@@ -483,3 +483,25 @@ fn held_normal_traction_under_shear() {
     let last = un.len() - 1;
     assert!((un[last] * 1.5e11 * (1.0 + d[last]) + 5e6).abs() <= 1e-6 * 5e6);
 }
+
+/// A test of 10^12 increments is refused before any row is computed,
+/// naming `increments`, the row count and `max_rows`; `max_rows` raises
+/// the limit.
+#[test]
+fn a_test_of_too_many_rows_is_refused_before_it_runs() {
+    let mut test = read_case("fczm-shear.yaml");
+    test.increments = 1_000_000_000_000;
+    let err = run(&test).unwrap_err().to_string();
+    let segments = test.path.len() - 1;
+    assert!(
+        err.contains("increments")
+            && err.contains(&format!("{} rows", 1_000_000_000_000 * segments + 1))
+            && err.contains("max_rows = 1000000"),
+        "{err}"
+    );
+    test.increments = 10;
+    test.max_rows = Some(5);
+    assert!(run(&test).unwrap_err().to_string().contains("max_rows = 5"));
+    test.max_rows = None;
+    assert!(run(&test).is_ok());
+}

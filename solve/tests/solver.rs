@@ -958,8 +958,8 @@ fn resume_at(
         std::env::temp_dir().join(format!("ribbar-resume-{}-{at}-{call}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("state.bin");
-    grab.1.unwrap().save(&path).unwrap();
-    let cp = solve::nonlinear::Checkpoint::load(&path).unwrap();
+    grab.1.unwrap().save(&path, "resume-test").unwrap();
+    let cp = solve::nonlinear::Checkpoint::load(&path, "resume-test").unwrap();
     let resumed = solve_pullout(m, laws, loading, settings, Some(cp), &mut Silent).unwrap();
     std::fs::remove_dir_all(&dir).ok();
     assert_eq!(full.rows.len(), resumed.rows.len());
@@ -2790,8 +2790,8 @@ fn a_run_resumed_after_any_step_equals_the_uninterrupted_one() {
     let mut differ = Vec::new();
     for (k, cp) in every.checkpoints.into_iter().enumerate() {
         // Through the file, as a stage resumes.
-        cp.save(&file).unwrap();
-        let cp = solve::nonlinear::Checkpoint::load(&file).unwrap();
+        cp.save(&file, "resume-test").unwrap();
+        let cp = solve::nonlinear::Checkpoint::load(&file, "resume-test").unwrap();
         let resumed = solve_pullout(&m, &laws, &loading, &settings, Some(cp), &mut Silent).unwrap();
         if resumed.rows != whole.rows
             || resumed.energy != whole.energy

@@ -7,16 +7,33 @@ use std::path::Path;
 
 pub fn run(ctx: &Ctx, out: &Path) -> Result<()> {
     let geo = ctx.done_dir(Stage::Geometry).join("specimen.geo");
-    let report = mesh::mesh_built_specimen(
-        ctx.gmsh,
-        &geo,
-        &ctx.scene.mesh,
+    let limit = ctx.scene.mesh.timeout;
+    let report = ctx.printer.while_running(
+        |t| {
+            format!(
+                "mesh: gmsh has run {:.0} s (it is stopped at mesh.timeout = {limit:.0} s)",
+                t.as_secs_f64()
+            )
+        },
+        || {
+            mesh::mesh_built_specimen(
+                ctx.gmsh,
+                &geo,
+                &ctx.scene.mesh,
+                &ctx.scene.bar,
+                &ctx.scene.specimen.geometry,
+                out,
+            )
+        },
+    )?;
+    let estimate = mesh::estimate::estimated_tets(
         &ctx.scene.bar,
         &ctx.scene.specimen.geometry,
-        out,
-    )?;
+        &ctx.scene.mesh,
+    );
     ctx.printer.detail(&format!(
-        "mesh: {} nodes, {} steel + {} concrete tets, {} interface elements, min quality {:.3}",
+        "mesh: {} nodes, {} steel + {} concrete tets ({estimate:.0} estimated from the size \
+         field), {} interface elements, min quality {:.3}",
         report.nodes,
         report.tets_steel,
         report.tets_concrete,

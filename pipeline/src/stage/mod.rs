@@ -6,6 +6,7 @@
 //! one rename and publishes its files under `WORK/<scene>/`.
 
 mod ctx;
+pub mod folder;
 mod geometry;
 mod keys;
 mod kinds;
@@ -19,4 +20,4 @@ pub use ctx::Ctx;
 pub use keys::Keys;
 pub use kinds::{Stage, CHECKPOINT_FILE};
 pub use runner::ensure;
-pub use status::{status, StageStatus};
+pub use status::{folder_report, status, StageStatus};

@@ -134,7 +134,7 @@ impl StageObserver<'_> {
             profile: self.profile.clone(),
             peak_profile: self.peak_profile.clone(),
         };
-        checkpoint.save(&self.checkpoint_path)?;
+        checkpoint.save(&self.checkpoint_path, checkpoint_key(self.ctx))?;
         self.checkpoint_cost = started.elapsed();
         self.last_checkpoint = Instant::now();
         Ok(())
@@ -343,39 +343,27 @@ pub fn run(ctx: &Ctx, out: &Path) -> Result<()> {
         .materials
         .element_laws(&model, ctx.scene.specimen.non_adhesive)?;
     let checkpoint_path = out.join(CHECKPOINT_FILE);
-    let checkpoint = load_checkpoint(ctx, &checkpoint_path);
-    let (peak_so_far, peak_passed) = peak_before(checkpoint.as_ref())?;
-    let record = checkpoint
-        .as_ref()
-        .map(|cp| cp.record.clone())
-        .unwrap_or_default();
-    let mut observer = StageObserver {
-        ctx,
-        laws: &laws,
-        checkpoint_path: checkpoint_path.clone(),
-        fields_dir: out.join("fields"),
-        whole: (ctx.scene.outputs.fields.whole_specimen && model.symmetry != mesh::Symmetry::Full)
-            .then(|| model.unfold()),
-        profile: record.profile,
-        peak_profile: record.peak_profile,
-        last_checkpoint: Instant::now(),
-        checkpoint_cost: Duration::ZERO,
-        peak: peak_so_far,
-        peak_passed,
-        pending_peak: None,
-        error: None,
-        cutbacks: Vec::new(),
-    };
+    let mut checkpoint = load_checkpoint(ctx, out)?;
     // A scheduler's SIGTERM stops the solve at its next converged step.
     let sigterm = crate::termination::catch_sigterm();
-    let outcome = solve::problems::pullout::solve_pullout(
-        &model,
-        &laws,
-        &ctx.scene.loading,
-        &ctx.scene.solver,
-        checkpoint,
-        &mut observer,
-    );
+    let (outcome, mut observer) = loop {
+        let resumed = checkpoint.is_some();
+        let mut observer = new_observer(ctx, &laws, &model, out, checkpoint.as_ref())?;
+        let outcome = solve::problems::pullout::solve_pullout(
+            &model,
+            &laws,
+            &ctx.scene.loading,
+            &ctx.scene.solver,
+            checkpoint.take(),
+            &mut observer,
+        );
+        match outcome {
+            // A whole checkpoint of this key taken on another model: not
+            // one to resume from either.
+            Err(SolveError::Checkpoint(why)) if resumed => set_aside(ctx, out, &why)?,
+            outcome => break (outcome, observer),
+        }
+    };
     drop(sigterm);
     ctx.printer.finish();
     if let Some(e) = observer.error.take() {
@@ -425,28 +413,93 @@ pub fn run(ctx: &Ctx, out: &Path) -> Result<()> {
     Ok(())
 }
 
-/// The in-progress checkpoint, if there is a usable one.
-fn load_checkpoint(ctx: &Ctx, checkpoint_path: &Path) -> Option<Checkpoint> {
-    if checkpoint_path.is_file() {
-        match Checkpoint::load(checkpoint_path) {
-            Ok(cp) => {
-                ctx.printer.line(&format!(
-                    "solve: resuming after step {} (u = {:.4} mm)",
-                    cp.state.path.rows.len(),
-                    cp.state.path.lambda * 1e3
-                ));
-                Some(cp)
-            }
-            Err(e) => {
-                ctx.printer.line(&format!(
-                    "solve: ignoring the unusable checkpoint ({e}); starting over"
-                ));
-                None
-            }
-        }
-    } else {
-        None
+/// The observer of a run from `checkpoint` (or from the start).
+fn new_observer<'a>(
+    ctx: &'a Ctx<'a>,
+    laws: &'a ElementLaws,
+    model: &Model,
+    out: &Path,
+    checkpoint: Option<&Checkpoint>,
+) -> Result<StageObserver<'a>> {
+    let (peak_so_far, peak_passed) = peak_before(checkpoint)?;
+    let record = checkpoint.map(|cp| cp.record.clone()).unwrap_or_default();
+    Ok(StageObserver {
+        ctx,
+        laws,
+        checkpoint_path: out.join(CHECKPOINT_FILE),
+        fields_dir: out.join("fields"),
+        whole: (ctx.scene.outputs.fields.whole_specimen && model.symmetry != mesh::Symmetry::Full)
+            .then(|| model.unfold()),
+        profile: record.profile,
+        peak_profile: record.peak_profile,
+        last_checkpoint: Instant::now(),
+        checkpoint_cost: Duration::ZERO,
+        peak: peak_so_far,
+        peak_passed,
+        pending_peak: None,
+        error: None,
+        cutbacks: Vec::new(),
+    })
+}
+
+/// The key a checkpoint of this stage carries: the solve stage's own.
+fn checkpoint_key<'k>(ctx: &'k Ctx) -> &'k str {
+    &ctx.keys.get(Stage::Solve).key
+}
+
+/// The in-progress checkpoint in `out`, if there is a usable one. One that
+/// is damaged, of another version or of another run is moved to the
+/// quarantine (the message names both paths) and the solve starts over;
+/// so does a solve without a checkpoint, from an emptied folder.
+fn load_checkpoint(ctx: &Ctx, out: &Path) -> Result<Option<Checkpoint>> {
+    let checkpoint_path = out.join(CHECKPOINT_FILE);
+    if !checkpoint_path.is_file() {
+        clear(out)?;
+        return Ok(None);
     }
+    match Checkpoint::load(&checkpoint_path, checkpoint_key(ctx)) {
+        Ok(cp) => {
+            ctx.printer.line(&format!(
+                "solve: resuming after step {} (u = {:.4} mm)",
+                cp.state.path.rows.len(),
+                cp.state.path.lambda * 1e3
+            ));
+            Ok(Some(cp))
+        }
+        Err(e) => {
+            set_aside(ctx, out, &e.to_string())?;
+            Ok(None)
+        }
+    }
+}
+
+/// Moves the unusable checkpoint in `out` to the quarantine, saying why,
+/// and empties `out` for a run from the start.
+fn set_aside(ctx: &Ctx, out: &Path, why: &str) -> Result<()> {
+    let path = out.join(CHECKPOINT_FILE);
+    let moved = ctx
+        .store
+        .quarantine(&path, &format!("solve-{}-checkpoint", checkpoint_key(ctx)))?;
+    ctx.printer.line(&format!(
+        "solve: not resuming from {}: {why}; moved to {}; starting over",
+        path.display(),
+        moved.display()
+    ));
+    clear(out)
+}
+
+/// Empties the in-progress folder `out` (files of a run that is not
+/// continued).
+fn clear(out: &Path) -> Result<()> {
+    for entry in std::fs::read_dir(out)? {
+        let path = entry?.path();
+        if path.is_dir() {
+            std::fs::remove_dir_all(&path)?;
+        } else {
+            std::fs::remove_file(&path)?;
+        }
+    }
+    Ok(())
 }
 
 /// The first peak of a resumed run's converged steps and whether the

@@ -1,5 +1,9 @@
 //! Everything needed to restart a run from a converged step, saved
-//! atomically (bincode behind a format tag).
+//! atomically as one framed file: a header with the format, the key of the
+//! run it belongs to and the SHA-256 of the payload, then the payload
+//! (bincode). A file whose checksum or key does not match is refused
+//! whole, so a resumed run never starts from flipped bytes or another
+//! model's state.
 
 use super::policy::{ConvergedPath, PolicyState};
 use super::summary::Summary;
@@ -9,6 +13,7 @@ use crate::fields::ProfileRow;
 use crate::spec::solver::REBUILD_COST_ITERATIONS;
 use mesh::Model;
 use serde::{Deserialize, Serialize};
+use sha2::{Digest, Sha256};
 use std::path::Path;
 
 /// Everything a run carries from one step to the next: its converged
@@ -164,45 +169,120 @@ pub enum CheckpointError {
         #[source]
         source: std::io::Error,
     },
-    #[error("checkpoint {path}: corrupt or of another version ({detail})")]
+    #[error("checkpoint {path}: damaged or of another version ({detail})")]
     Corrupt { path: String, detail: String },
+    /// A whole, undamaged checkpoint of another run (another model, other
+    /// inputs): resuming from it would continue someone else's curve.
+    #[error("checkpoint {path}: belongs to the run with key {found}, not to {expected}")]
+    Foreign {
+        path: String,
+        found: String,
+        expected: String,
+    },
 }
 
-const CHECKPOINT_MAGIC: u64 = 0x7269_6262_6172_000e;
+/// The file's first bytes: what it is.
+const CHECKPOINT_MAGIC: &[u8; 8] = b"RIBBARCP";
+/// Version of the framing and of the payload's layout; a checkpoint of
+/// another version is refused (a run starts over rather than misread it).
+const CHECKPOINT_FORMAT: u32 = 2;
+/// The longest key a header may carry, bytes (keys are 32 hex digits).
+const MAX_KEY_BYTES: usize = 256;
+
+/// The framed file: magic, format (u32), key length (u32) and key, payload
+/// length (u64), SHA-256 of the payload, payload; integers little-endian.
+fn frame(key: &str, payload: &[u8]) -> Vec<u8> {
+    let mut out = Vec::with_capacity(payload.len() + key.len() + 64);
+    out.extend_from_slice(CHECKPOINT_MAGIC);
+    out.extend_from_slice(&CHECKPOINT_FORMAT.to_le_bytes());
+    out.extend_from_slice(&(key.len() as u32).to_le_bytes());
+    out.extend_from_slice(key.as_bytes());
+    out.extend_from_slice(&(payload.len() as u64).to_le_bytes());
+    out.extend_from_slice(&Sha256::digest(payload));
+    out.extend_from_slice(payload);
+    out
+}
+
+/// The key and the checked payload of a framed file, or what is wrong
+/// with it.
+fn unframe(bytes: &[u8]) -> Result<(&str, &[u8]), String> {
+    let mut rest = bytes;
+    let mut take = |n: usize, what: &str| -> Result<&[u8], String> {
+        if rest.len() < n {
+            return Err(format!("truncated in its {what}"));
+        }
+        let (head, tail) = rest.split_at(n);
+        rest = tail;
+        Ok(head)
+    };
+    if take(8, "header")? != CHECKPOINT_MAGIC {
+        return Err("not a ribbar checkpoint (no RIBBARCP header)".into());
+    }
+    let format = u32::from_le_bytes(take(4, "header")?.try_into().expect("4 bytes"));
+    if format != CHECKPOINT_FORMAT {
+        return Err(format!(
+            "format {format}, this ribbar reads format {CHECKPOINT_FORMAT}"
+        ));
+    }
+    let key_len = u32::from_le_bytes(take(4, "header")?.try_into().expect("4 bytes")) as usize;
+    if key_len > MAX_KEY_BYTES {
+        return Err(format!("a key of {key_len} bytes in its header"));
+    }
+    let key = std::str::from_utf8(take(key_len, "header")?)
+        .map_err(|_| "a key that is not text in its header".to_string())?;
+    let len = u64::from_le_bytes(take(8, "header")?.try_into().expect("8 bytes"));
+    let checksum = take(32, "header")?;
+    if rest.len() as u64 != len {
+        return Err(format!(
+            "{} bytes of state where its header says {len}",
+            rest.len()
+        ));
+    }
+    if Sha256::digest(rest).as_slice() != checksum {
+        return Err("its SHA-256 does not match the one in its header".into());
+    }
+    Ok((key, rest))
+}
 
 impl Checkpoint {
-    /// Writes atomically (temporary file then rename), bincode.
-    pub fn save(&self, path: &Path) -> Result<(), CheckpointError> {
-        let io = |source| CheckpointError::Io {
-            path: path.display().to_string(),
-            source,
-        };
-        let bytes = bincode::serialize(&(CHECKPOINT_MAGIC, self)).map_err(|e| {
-            CheckpointError::Corrupt {
-                path: path.display().to_string(),
-                detail: e.to_string(),
-            }
+    /// Writes atomically (temporary file then rename) with the key of the
+    /// run it belongs to (`key`, e.g. the solve stage's key) and the
+    /// payload's checksum.
+    pub fn save(&self, path: &Path, key: &str) -> Result<(), CheckpointError> {
+        let shown = || path.display().to_string();
+        let payload = bincode::serialize(self).map_err(|e| CheckpointError::Corrupt {
+            path: shown(),
+            detail: e.to_string(),
         })?;
-        geom::fsutil::write_atomic(path, &bytes).map_err(io)
+        geom::fsutil::write_atomic(path, &frame(key, &payload)).map_err(|source| {
+            CheckpointError::Io {
+                path: shown(),
+                source,
+            }
+        })
     }
 
-    pub fn load(path: &Path) -> Result<Self, CheckpointError> {
+    /// Reads a checkpoint saved with `key`; one whose checksum fails, of
+    /// another format, or saved with another key is an error that says so.
+    pub fn load(path: &Path, key: &str) -> Result<Self, CheckpointError> {
+        let shown = || path.display().to_string();
         let bytes = std::fs::read(path).map_err(|source| CheckpointError::Io {
-            path: path.display().to_string(),
+            path: shown(),
             source,
         })?;
-        let (magic, cp): (u64, Checkpoint) =
-            bincode::deserialize(&bytes).map_err(|e| CheckpointError::Corrupt {
-                path: path.display().to_string(),
-                detail: e.to_string(),
-            })?;
-        if magic != CHECKPOINT_MAGIC {
-            return Err(CheckpointError::Corrupt {
-                path: path.display().to_string(),
-                detail: format!("format tag {magic:#x}"),
+        let corrupt = |detail: String| CheckpointError::Corrupt {
+            path: shown(),
+            detail,
+        };
+        let (found, payload) = unframe(&bytes).map_err(corrupt)?;
+        if found != key {
+            return Err(CheckpointError::Foreign {
+                path: shown(),
+                found: found.to_string(),
+                expected: key.to_string(),
             });
         }
-        Ok(cp)
+        bincode::deserialize(payload).map_err(|e| corrupt(e.to_string()))
     }
 
     /// `Err` with what differs when this checkpoint was not taken on
@@ -235,6 +315,50 @@ impl Checkpoint {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A framed payload reads back whole; every flipped byte (header,
+    /// checksum or state) and every truncation is refused, never read as
+    /// a state.
+    #[test]
+    fn every_flipped_byte_and_truncation_of_a_frame_is_refused() {
+        let payload: Vec<u8> = (0..200u8).collect();
+        let bytes = frame("0123abcd", &payload);
+        assert_eq!(unframe(&bytes), Ok(("0123abcd", payload.as_slice())));
+        for i in 0..bytes.len() {
+            let mut flipped = bytes.clone();
+            flipped[i] ^= 0x40;
+            // A flip inside the key can only give another key, which
+            // `load` refuses as foreign; anything else fails here.
+            if let Ok((key, data)) = unframe(&flipped) {
+                assert!(key != "0123abcd" && data == payload, "byte {i}");
+            }
+        }
+        for n in 0..bytes.len() {
+            assert!(unframe(&bytes[..n]).is_err(), "truncated to {n} bytes");
+        }
+        let mut longer = bytes.clone();
+        longer.push(0);
+        assert!(unframe(&longer).unwrap_err().contains("header says"));
+    }
+
+    /// `load` names the file and tells a foreign checkpoint (another key)
+    /// from a damaged one.
+    #[test]
+    fn load_tells_foreign_from_damaged() {
+        let dir = std::env::temp_dir().join(format!("ribbar-cp-frame-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("checkpoint.bin");
+        std::fs::write(&path, frame("other", b"not a state")).unwrap();
+        let err = Checkpoint::load(&path, "mine").unwrap_err();
+        assert!(matches!(err, CheckpointError::Foreign { .. }), "{err}");
+        assert!(err.to_string().contains("checkpoint.bin") && err.to_string().contains("other"));
+        let err = Checkpoint::load(&path, "other").unwrap_err();
+        assert!(matches!(err, CheckpointError::Corrupt { .. }), "{err}");
+        std::fs::write(&path, b"RIBBARCP\x01\x00\x00\x00").unwrap();
+        let err = Checkpoint::load(&path, "mine").unwrap_err().to_string();
+        assert!(err.contains("format 1"), "{err}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 
     /// Solves of `iterations` each reaching `residual` until the wear
     /// passes a build (40 iterations); returns how many it took.

@@ -107,6 +107,10 @@ fn default_increments() -> usize {
     100
 }
 
+/// The most rows a test writes unless its `max_rows` says more: a million
+/// rows is about 200 MB of CSV.
+pub const DEFAULT_MAX_ROWS: usize = 1_000_000;
+
 /// A material-point test as written.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -121,6 +125,10 @@ pub struct MaterialTest {
     /// Held stress (traction) components and their values.
     #[serde(default)]
     pub stress: BTreeMap<String, RawQuantity>,
+    /// The most rows the test may write (default [`DEFAULT_MAX_ROWS`]):
+    /// `increments` × segments + 1, refused before any is computed.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_rows: Option<usize>,
 }
 
 /// What went wrong; `key` is the dotted path in the test file.
@@ -481,6 +489,7 @@ pub fn run(test: &MaterialTest) -> Result<PointTable, MaterialPointError> {
             detail: "needs at least two rows (start and end)".into(),
         });
     }
+    check_rows(test)?;
     let held = held_stresses(test, stresses)?;
     let points = path_points(test, bulk, names, stresses, &held)?;
     let columns = table_columns(&law, names, stresses);
@@ -650,11 +659,35 @@ fn table_row(law: &PointLaw, t: f64, x: &[f64], s: &Solved) -> Vec<f64> {
     row
 }
 
+/// Refuses a test whose table would have more rows than its `max_rows`.
+fn check_rows(test: &MaterialTest) -> Result<(), MaterialPointError> {
+    let segments = test.path.len() - 1;
+    let rows = test
+        .increments
+        .checked_mul(segments)
+        .and_then(|n| n.checked_add(1));
+    let max = test.max_rows.unwrap_or(DEFAULT_MAX_ROWS);
+    match rows {
+        Some(n) if n <= max => Ok(()),
+        _ => Err(MaterialPointError::Input {
+            key: "increments".into(),
+            detail: format!(
+                "{} increments × {segments} segments give {} rows, more than max_rows = {max}; \
+                 lower increments, or raise max_rows if that many rows are meant",
+                test.increments,
+                rows.map_or("more than 2^64".to_string(), |n| (n).to_string())
+            ),
+        }),
+    }
+}
+
 /// Reads and runs a test file; errors name the file.
 pub fn run_file(path: &Path) -> Result<PointTable, MaterialPointError> {
-    let text = std::fs::read_to_string(path).map_err(|source| MaterialPointError::Io {
-        path: path.to_path_buf(),
-        source,
+    let text = geom::fsutil::read_capped(path, geom::fsutil::MAX_SPEC_BYTES).map_err(|source| {
+        MaterialPointError::Io {
+            path: path.to_path_buf(),
+            source,
+        }
     })?;
     let test: MaterialTest = serde_yaml::from_str(&text).map_err(|e| MaterialPointError::Yaml {
         path: path.to_path_buf(),
