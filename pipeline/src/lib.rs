@@ -17,4 +17,6 @@ pub mod scene;
 pub mod stage;
 pub mod store;
 pub mod study;
+pub mod study_results;
 pub mod study_run;
+mod study_sensitivity;

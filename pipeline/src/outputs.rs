@@ -3,6 +3,7 @@
 //! (fields need the state at their step, which only exists while solving);
 //! everything else is read by post alone, so changing it reruns post only.
 
+use crate::post::BondConditions;
 use geom::units::{Dim, RawQuantity};
 use serde::{Deserialize, Serialize};
 
@@ -16,6 +17,12 @@ pub struct RawOutputs {
     pub residual_fraction: Option<f64>,
     /// Plot formats among png, svg (default both); empty list: no plots.
     pub plots: Option<Vec<PlotFormat>>,
+    /// MC2010's bond conditions of the design code's law beside the curve:
+    /// good (default) or other.
+    pub bond_conditions: Option<BondConditions>,
+    /// Points of the piecewise-linear bond law fitted to the curve, the
+    /// origin included (default 8).
+    pub bond_law_points: Option<usize>,
 }
 
 #[derive(Debug, Clone, Default, Deserialize, Serialize)]
@@ -58,7 +65,13 @@ pub struct PostRequest {
     pub energy_fed_limit: f64,
     pub residual_fraction: f64,
     pub plots: Vec<PlotFormat>,
+    pub bond_conditions: BondConditions,
+    pub bond_law_points: usize,
 }
+
+/// Default points of the piecewise-linear bond law: enough for an adhesion
+/// peak, its fall and a frictional rise.
+pub const DEFAULT_BOND_LAW_POINTS: usize = 8;
 
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Outputs {
@@ -103,6 +116,14 @@ impl RawOutputs {
                 bound: "must be in (0, 1]",
             });
         }
+        let bond_law_points = self.bond_law_points.unwrap_or(DEFAULT_BOND_LAW_POINTS);
+        if !(2..=64).contains(&bond_law_points) {
+            return Err(OutputsError::OutOfRange {
+                key: "outputs.bond_law_points",
+                value: bond_law_points.to_string(),
+                bound: "must be in [2, 64] (the origin and at least one more point)",
+            });
+        }
         let mut plots = self
             .plots
             .clone()
@@ -119,6 +140,8 @@ impl RawOutputs {
                 energy_fed_limit,
                 residual_fraction,
                 plots,
+                bond_conditions: self.bond_conditions.unwrap_or_default(),
+                bond_law_points,
             },
         })
     }
@@ -137,5 +160,12 @@ mod tests {
         let err = raw.resolve().unwrap_err().to_string();
         assert!(err.contains("outputs.residual_fraction"), "{err}");
         assert!(serde_yaml::from_str::<RawOutputs>("plot: [png]").is_err());
+        assert_eq!(o.post.bond_conditions, BondConditions::Good);
+        assert_eq!(o.post.bond_law_points, DEFAULT_BOND_LAW_POINTS);
+        let raw: RawOutputs =
+            serde_yaml::from_str("{bond_conditions: other, bond_law_points: 1}").unwrap();
+        let err = raw.resolve().unwrap_err().to_string();
+        assert!(err.contains("outputs.bond_law_points"), "{err}");
+        assert!(serde_yaml::from_str::<RawOutputs>("bond_conditions: poor").is_err());
     }
 }
