@@ -46,7 +46,7 @@ pub use responses::{
     SUMMARY_RESPONSES,
 };
 pub use sequence::{generator, Method, Stream};
-pub use space::{display_unit, Axis, AxisValue, Scale, Span};
+pub use space::{display_unit, short_key, Axis, AxisValue, Scale, Span};
 
 use serde::Deserialize;
 use std::collections::BTreeMap;

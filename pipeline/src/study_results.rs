@@ -12,7 +12,7 @@
 
 use crate::post::{self, Cell, CurveRow, Table};
 use crate::progress::Printer;
-use crate::study::{display_unit, Axis, Design, Plan, Response, Role, Study};
+use crate::study::{display_unit, short_key, Axis, Design, Plan, Response, Study};
 use anyhow::Result;
 use serde_json::Value as Json;
 use std::path::Path;
@@ -242,22 +242,6 @@ fn with_unit(name: &str, unit: &str) -> String {
     }
 }
 
-/// The shortest dotted suffix of `key` that no other axis shares.
-pub fn short_key(key: &str, axes: &[Axis]) -> String {
-    let parts: Vec<&str> = key.split('.').collect();
-    for n in 1..=parts.len() {
-        let suffix = parts[parts.len() - n..].join(".");
-        let clash = axes
-            .iter()
-            .filter(|a| a.key != key)
-            .any(|a| a.key.ends_with(&format!(".{suffix}")) || a.key == suffix);
-        if !clash {
-            return suffix;
-        }
-    }
-    key.to_string()
-}
-
 /// One trend plot per response: a panel per numeric parameter and one for
 /// f_R, each with the counted cases and their least-squares line.
 fn trend_plots(design: &Design, cases: &[CaseResult], plots: &Path) -> Result<()> {
@@ -313,29 +297,4 @@ fn trend_plots(design: &Design, cases: &[CaseResult], plots: &Path) -> Result<()
         )?;
     }
     Ok(())
-}
-
-/// The case indices of each Saltelli row (A, B, AB_1 … AB_d) that the
-/// design holds in full, by row.
-pub fn saltelli_rows(design: &Design) -> Vec<(usize, usize, Vec<usize>)> {
-    let d = design.axes.len();
-    let mut rows: Vec<(Option<usize>, Option<usize>, Vec<Option<usize>>)> = Vec::new();
-    for (k, p) in design.points.points.iter().enumerate() {
-        let row = match p.role {
-            Role::SobolA { row } | Role::SobolB { row } | Role::SobolAB { row, .. } => row,
-            _ => continue,
-        };
-        if rows.len() <= row {
-            rows.resize(row + 1, (None, None, vec![None; d]));
-        }
-        match p.role {
-            Role::SobolA { .. } => rows[row].0 = Some(k),
-            Role::SobolB { .. } => rows[row].1 = Some(k),
-            Role::SobolAB { parameter, .. } => rows[row].2[parameter] = Some(k),
-            _ => {}
-        }
-    }
-    rows.into_iter()
-        .filter_map(|(a, b, ab)| Some((a?, b?, ab.into_iter().collect::<Option<Vec<_>>>()?)))
-        .collect()
 }

@@ -12,8 +12,7 @@
 //! not depend on the parameters; the counts say how many were left.
 
 use crate::post::{self, SensitivityBars};
-use crate::study::{display_unit, Design, Plan, Role};
-use crate::study_results::{saltelli_rows, short_key};
+use crate::study::{display_unit, short_key, Design, Plan, Role};
 use anyhow::Result;
 use std::path::Path;
 
@@ -234,4 +233,29 @@ fn morris(design: &Design, responses: &[Vec<Option<f64>>], seed: u64) -> Outcome
             post::BOOTSTRAP_RESAMPLES
         ),
     )
+}
+
+/// The case indices of each Saltelli row (A, B, AB_1 … AB_d) that the
+/// design holds in full, by row.
+fn saltelli_rows(design: &Design) -> Vec<(usize, usize, Vec<usize>)> {
+    let d = design.axes.len();
+    let mut rows: Vec<(Option<usize>, Option<usize>, Vec<Option<usize>>)> = Vec::new();
+    for (k, p) in design.points.points.iter().enumerate() {
+        let row = match p.role {
+            Role::SobolA { row } | Role::SobolB { row } | Role::SobolAB { row, .. } => row,
+            _ => continue,
+        };
+        if rows.len() <= row {
+            rows.resize(row + 1, (None, None, vec![None; d]));
+        }
+        match p.role {
+            Role::SobolA { .. } => rows[row].0 = Some(k),
+            Role::SobolB { .. } => rows[row].1 = Some(k),
+            Role::SobolAB { parameter, .. } => rows[row].2[parameter] = Some(k),
+            _ => {}
+        }
+    }
+    rows.into_iter()
+        .filter_map(|(a, b, ab)| Some((a?, b?, ab.into_iter().collect::<Option<Vec<_>>>()?)))
+        .collect()
 }

@@ -191,6 +191,22 @@ impl Axis {
     }
 }
 
+/// The shortest dotted suffix of `key` that no other axis shares.
+pub fn short_key(key: &str, axes: &[Axis]) -> String {
+    let parts: Vec<&str> = key.split('.').collect();
+    for n in 1..=parts.len() {
+        let suffix = parts[parts.len() - n..].join(".");
+        let clash = axes
+            .iter()
+            .filter(|a| a.key != key)
+            .any(|a| a.key.ends_with(&format!(".{suffix}")) || a.key == suffix);
+        if !clash {
+            return suffix;
+        }
+    }
+    key.to_string()
+}
+
 /// A SI unit's factor to the unit plots and messages use, and that unit's
 /// name ("" for a pure number).
 pub fn display_unit(unit: &str) -> (f64, &str) {
