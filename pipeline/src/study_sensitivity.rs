@@ -11,7 +11,7 @@
 //! Leaving them out keeps the estimators unbiased only if the failures do
 //! not depend on the parameters; the counts say how many were left.
 
-use crate::post::{self, SensitivityBars};
+use crate::post::{self, Measure, SensitivityBars};
 use crate::study::{display_unit, short_key, Design, Plan, Role};
 use anyhow::Result;
 use std::path::Path;
@@ -132,14 +132,14 @@ fn sobol(design: &Design, responses: &[Vec<Option<f64>>], seed: u64) -> Result<O
             response: name,
             parameters: short.clone(),
             measures: vec![
-                (
-                    "S1".into(),
-                    indices.iter().map(|i| (i.s1, Some(i.s1_conf))).collect(),
-                ),
-                (
-                    "ST".into(),
-                    indices.iter().map(|i| (i.st, Some(i.st_conf))).collect(),
-                ),
+                Measure {
+                    name: "S1".into(),
+                    bars: indices.iter().map(|i| (i.s1, Some(i.s1_conf))).collect(),
+                },
+                Measure {
+                    name: "ST".into(),
+                    bars: indices.iter().map(|i| (i.st, Some(i.st_conf))).collect(),
+                },
             ],
         });
     }
@@ -215,7 +215,16 @@ fn morris(design: &Design, responses: &[Vec<Option<f64>>], seed: u64) -> Outcome
                 format!("{name} ({unit})")
             },
             parameters: short.clone(),
-            measures: vec![("μ*".into(), mu_star), ("σ".into(), sigma)],
+            measures: vec![
+                Measure {
+                    name: "μ*".into(),
+                    bars: mu_star,
+                },
+                Measure {
+                    name: "σ".into(),
+                    bars: sigma,
+                },
+            ],
         });
     }
     (
@@ -238,24 +247,38 @@ fn morris(design: &Design, responses: &[Vec<Option<f64>>], seed: u64) -> Outcome
 /// The case indices of each Saltelli row (A, B, AB_1 … AB_d) that the
 /// design holds in full, by row.
 fn saltelli_rows(design: &Design) -> Vec<(usize, usize, Vec<usize>)> {
+    /// The cases of one row found so far.
+    #[derive(Clone)]
+    struct Row {
+        a: Option<usize>,
+        b: Option<usize>,
+        ab: Vec<Option<usize>>,
+    }
     let d = design.axes.len();
-    let mut rows: Vec<(Option<usize>, Option<usize>, Vec<Option<usize>>)> = Vec::new();
+    let mut rows: Vec<Row> = Vec::new();
     for (k, p) in design.points.points.iter().enumerate() {
         let row = match p.role {
             Role::SobolA { row } | Role::SobolB { row } | Role::SobolAB { row, .. } => row,
             _ => continue,
         };
         if rows.len() <= row {
-            rows.resize(row + 1, (None, None, vec![None; d]));
+            rows.resize(
+                row + 1,
+                Row {
+                    a: None,
+                    b: None,
+                    ab: vec![None; d],
+                },
+            );
         }
         match p.role {
-            Role::SobolA { .. } => rows[row].0 = Some(k),
-            Role::SobolB { .. } => rows[row].1 = Some(k),
-            Role::SobolAB { parameter, .. } => rows[row].2[parameter] = Some(k),
+            Role::SobolA { .. } => rows[row].a = Some(k),
+            Role::SobolB { .. } => rows[row].b = Some(k),
+            Role::SobolAB { parameter, .. } => rows[row].ab[parameter] = Some(k),
             _ => {}
         }
     }
     rows.into_iter()
-        .filter_map(|(a, b, ab)| Some((a?, b?, ab.into_iter().collect::<Option<Vec<_>>>()?)))
+        .filter_map(|r| Some((r.a?, r.b?, r.ab.into_iter().collect::<Option<Vec<_>>>()?)))
         .collect()
 }

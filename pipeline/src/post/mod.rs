@@ -61,7 +61,7 @@ pub use plot::{
     ReferenceCurve, FONT_FAMILY,
 };
 pub use plot_study::{
-    sensitivity_plot, trend_line, trend_plot, SensitivityBars, TrendLine, TrendPanel,
+    sensitivity_plot, trend_line, trend_plot, Measure, SensitivityBars, TrendLine, TrendPanel,
 };
 pub use sensitivity::{
     morris_indices, morris_table, sobol_indices, sobol_table, MorrisIndex, SobolIndex,

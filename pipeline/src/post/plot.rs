@@ -425,7 +425,10 @@ where
         "Free-end displacement FED (mm)",
         "Mean bond stress σ_mb (MPa)",
     )?;
-    let legend = curves.len() > 1 || !references.is_empty();
+    // A legend of more curves than this would cover the plot; a study's
+    // table names its cases.
+    const MAX_LEGEND: usize = 12;
+    let legend = (curves.len() > 1 && curves.len() <= MAX_LEGEND) || !references.is_empty();
     for (i, ((label, _), pts)) in curves.iter().zip(&series).enumerate() {
         draw_series(&mut chart, pts, i, legend.then_some(*label))?;
     }

@@ -182,15 +182,21 @@ pub fn trend_plot(
     render_svg(svg, size, |root| draw_trends(root, y_label, panels))
 }
 
+/// One measure of a response's indices (S1, ST, μ*, σ): per parameter its
+/// value and, where it has one, its confidence half-width.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Measure {
+    pub name: String,
+    pub bars: Vec<(f64, Option<f64>)>,
+}
+
 /// The indices of one response: one group of bars per parameter, one bar
-/// per measure (S1 and ST, or μ* and σ), with confidence half-widths where
-/// the measure has them.
+/// per measure (S1 and ST, or μ* and σ).
 #[derive(Debug, Clone, PartialEq)]
 pub struct SensitivityBars {
     pub response: String,
     pub parameters: Vec<String>,
-    /// (measure name, per parameter (value, half-width)).
-    pub measures: Vec<(String, Vec<(f64, Option<f64>)>)>,
+    pub measures: Vec<Measure>,
 }
 
 fn draw_bars<DB>(
@@ -208,11 +214,11 @@ where
         let tops = panel
             .measures
             .iter()
-            .flat_map(|(_, v)| v.iter().map(|(x, c)| x + c.unwrap_or(0.0)));
+            .flat_map(|m| m.bars.iter().map(|(x, c)| x + c.unwrap_or(0.0)));
         let lows = panel
             .measures
             .iter()
-            .flat_map(|(_, v)| v.iter().map(|(x, c)| x - c.unwrap_or(0.0)));
+            .flat_map(|m| m.bars.iter().map(|(x, c)| x - c.unwrap_or(0.0)));
         let (y0, y1) = padded_range(tops.chain(lows), true);
         let names = panel.parameters.clone();
         let mut chart = ChartBuilder::on(area)
@@ -244,7 +250,7 @@ where
             .draw()?;
         let groups = panel.measures.len().max(1) as f64;
         let width = 0.8 / groups;
-        for (m, (name, values)) in panel.measures.iter().enumerate() {
+        for (m, Measure { name, bars: values }) in panel.measures.iter().enumerate() {
             let color = PALETTE[(m + 1) % PALETTE.len()];
             let left = |i: usize| i as f64 - 0.4 + width * m as f64;
             chart
@@ -292,7 +298,7 @@ pub fn sensitivity_plot(
             &format!("indices of `{}`", p.response),
             p.measures
                 .iter()
-                .flat_map(|(_, v)| v.iter().flat_map(|(x, c)| [*x, c.unwrap_or(0.0)])),
+                .flat_map(|m| m.bars.iter().flat_map(|(x, c)| [*x, c.unwrap_or(0.0)])),
         )?;
     }
     let size = grid_size(panels.len());

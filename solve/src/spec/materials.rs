@@ -820,7 +820,7 @@ mod tests {
         let plain = serde_json::to_value(resolve("{}").unwrap()).unwrap();
         assert!(plain.get("concrete_fcm").is_none(), "{plain}");
         assert_eq!(
-            serde_json::to_value(&m.concrete).unwrap(),
+            serde_json::to_value(m.concrete).unwrap(),
             serde_json::to_value(resolve("{}").unwrap().concrete).unwrap()
         );
     }
