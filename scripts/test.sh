@@ -83,7 +83,10 @@ wait_for "$maturin_pid" maturin
 rm -rf target/wheels-test .tools/python-test-venv
 .tools/maturin-venv/bin/maturin build --quiet --profile dev --out target/wheels-test
 python3 -m venv .tools/python-test-venv
-.tools/python-test-venv/bin/pip install -q --disable-pip-version-check target/wheels-test/ribbar-*.whl "pytest>=7"
+# nbclient, nbformat and ipykernel execute the example notebook
+# (python/tests/test_studies.py).
+.tools/python-test-venv/bin/pip install -q --disable-pip-version-check target/wheels-test/ribbar-*.whl "pytest>=7" \
+  "nbclient>=0.10" "nbformat>=5.9" "ipykernel>=6.29"
 env -u GMSH .tools/python-test-venv/bin/python -m pytest -q python/tests
 phase "python package"
 # The user guide: the book builds (its links and pages are checked by

@@ -204,6 +204,48 @@ impl RawQuantity {
     }
 }
 
+impl RawQuantity {
+    /// Resolves to SI base units with the dimension its unit names, for a
+    /// value whose key's dimension is not known (a study's range): `None`
+    /// for a plain number (SI as it stands) or a pure-number unit. Every
+    /// unit belongs to one dimension.
+    pub fn to_si_any(&self, key: &str) -> Result<(f64, Option<Dim>), UnitError> {
+        let RawQuantity::Text(text) = self else {
+            return Ok((self.to_si(Dim::Dimensionless, key)?, None));
+        };
+        let unit = split_number(text).map(|(_, unit)| unit);
+        let dim = match unit {
+            Some(unit) if !unit.is_empty() => Dim::ALL
+                .into_iter()
+                .find(|d| d.units().iter().any(|(name, _)| *name == unit))
+                .ok_or_else(|| UnitError::WrongUnit {
+                    key: key.to_string(),
+                    unit: unit.to_string(),
+                    dim: Dim::Dimensionless,
+                    accepted: "a unit of any dimension, e.g. mm, MPa, N/m, deg".into(),
+                })?,
+            _ => Dim::Dimensionless,
+        };
+        let value = self.to_si(dim, key)?;
+        Ok((value, (dim != Dim::Dimensionless).then_some(dim)))
+    }
+}
+
+/// The longest prefix of `text` that reads as a number, and the rest.
+fn split_number(text: &str) -> Option<(f64, &str)> {
+    let trimmed = text.trim();
+    let split = trimmed
+        .char_indices()
+        .map(|(i, _)| i)
+        .chain(std::iter::once(trimmed.len()))
+        .rev()
+        .find(|&i| trimmed[..i].trim().parse::<f64>().is_ok())?;
+    Some((
+        trimmed[..split].trim().parse().ok()?,
+        trimmed[split..].trim(),
+    ))
+}
+
 fn parse_with_unit(text: &str, dim: Dim, key: &str) -> Result<f64, UnitError> {
     let trimmed = text.trim();
     // The number is the longest prefix that parses; the rest is the unit.
@@ -261,6 +303,34 @@ mod tests {
             RawQuantity::Number(0.25).to_si(Dim::Length, "k").unwrap(),
             0.25
         );
+    }
+
+    /// A quantity's dimension follows from its unit alone; plain numbers
+    /// and pure-number units have none.
+    #[test]
+    fn the_dimension_is_read_off_the_unit() {
+        let any = |t: &str| RawQuantity::Text(t.into()).to_si_any("k");
+        let (v, d) = any("0.3 mm").unwrap();
+        assert!((v - 3e-4).abs() < 1e-18 && d == Some(Dim::Length));
+        assert_eq!(any("90 deg").unwrap().1, Some(Dim::Angle));
+        assert_eq!(any("97 N/m").unwrap().1, Some(Dim::EnergyPerArea));
+        assert_eq!(any("2 MPa").unwrap(), (2e6, Some(Dim::Stress)));
+        assert_eq!(any("5 %").unwrap(), (0.05, None));
+        assert_eq!(any("0.3").unwrap(), (0.3, None));
+        assert_eq!(
+            RawQuantity::Number(0.02).to_si_any("k").unwrap(),
+            (0.02, None)
+        );
+        let err = any("3 furlongs").unwrap_err().to_string();
+        assert!(err.contains("furlongs"), "{err}");
+        // Every unit names one dimension.
+        for a in Dim::ALL {
+            for b in Dim::ALL.into_iter().filter(|&b| b != a) {
+                for (unit, _) in a.units() {
+                    assert!(!b.units().iter().any(|(u, _)| u == unit), "{unit}");
+                }
+            }
+        }
     }
 
     #[test]

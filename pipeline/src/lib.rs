@@ -26,6 +26,8 @@ pub mod store;
 pub mod store_lock;
 pub mod study;
 pub mod study_outcome;
+pub mod study_results;
 pub mod study_run;
+mod study_sensitivity;
 pub mod termination;
 mod verify;

@@ -3,6 +3,7 @@
 //! (fields need the state at their step, which only exists while solving);
 //! everything else is read by post alone, so changing it reruns post only.
 
+use crate::post::BondConditions;
 use geom::units::{Dim, RawQuantity};
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
@@ -26,6 +27,12 @@ pub struct RawOutputs {
     /// Formats of `plots/bond_slip.*` and `plots/interface_profile.*`; an
     /// empty list writes none (list of png, svg; default [png, svg]).
     pub plots: Option<Vec<PlotFormat>>,
+    /// fib Model Code 2010's bond conditions of the design code's law drawn
+    /// beside the curve: `good` or `other` (choice; default good).
+    pub bond_conditions: Option<BondConditions>,
+    /// Points of the piecewise-linear bond law fitted to the curve
+    /// (`bond_law.json`), the origin included (count; default 8; 2 to 64).
+    pub bond_law_points: Option<usize>,
 }
 
 /// `outputs.fields` as written.
@@ -79,7 +86,13 @@ pub struct PostRequest {
     pub energy_fed_limit: f64,
     pub residual_fraction: f64,
     pub plots: Vec<PlotFormat>,
+    pub bond_conditions: BondConditions,
+    pub bond_law_points: usize,
 }
+
+/// Default points of the piecewise-linear bond law: enough for an adhesion
+/// peak, its fall and a frictional rise.
+pub const DEFAULT_BOND_LAW_POINTS: usize = 8;
 
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Outputs {
@@ -124,6 +137,14 @@ impl RawOutputs {
                 bound: "must be in (0, 1]",
             });
         }
+        let bond_law_points = self.bond_law_points.unwrap_or(DEFAULT_BOND_LAW_POINTS);
+        if !(2..=64).contains(&bond_law_points) {
+            return Err(OutputsError::OutOfRange {
+                key: "outputs.bond_law_points",
+                value: bond_law_points.to_string(),
+                bound: "must be in [2, 64] (the origin and at least one more point)",
+            });
+        }
         let mut plots = self
             .plots
             .clone()
@@ -140,6 +161,8 @@ impl RawOutputs {
                 energy_fed_limit,
                 residual_fraction,
                 plots,
+                bond_conditions: self.bond_conditions.unwrap_or_default(),
+                bond_law_points,
             },
         })
     }
@@ -158,5 +181,12 @@ mod tests {
         let err = raw.resolve().unwrap_err().to_string();
         assert!(err.contains("outputs.residual_fraction"), "{err}");
         assert!(serde_yaml::from_str::<RawOutputs>("plot: [png]").is_err());
+        assert_eq!(o.post.bond_conditions, BondConditions::Good);
+        assert_eq!(o.post.bond_law_points, DEFAULT_BOND_LAW_POINTS);
+        let raw: RawOutputs =
+            serde_yaml::from_str("{bond_conditions: other, bond_law_points: 1}").unwrap();
+        let err = raw.resolve().unwrap_err().to_string();
+        assert!(err.contains("outputs.bond_law_points"), "{err}");
+        assert!(serde_yaml::from_str::<RawOutputs>("bond_conditions: poor").is_err());
     }
 }

@@ -93,12 +93,32 @@ fn undocumented_section<T: de::DeserializeOwned>() -> Schema {
     schema
 }
 
-/// A study's `parameters`: dotted keys, each with a non-empty list.
+/// A study's `parameters`: dotted keys, each with a non-empty list (sweep,
+/// convergence) or a range or choices (sample, sensitivity).
 pub fn parameter_lists(_: &mut SchemaGenerator) -> Schema {
     json_schema!({
         "type": "object",
         "minProperties": 1,
-        "additionalProperties": {"type": "array", "minItems": 1}
+        "additionalProperties": {
+            "anyOf": [
+                {"type": "array", "minItems": 1},
+                {
+                    "type": "object",
+                    "properties": {
+                        "range": {"type": "array", "minItems": 2, "maxItems": 2},
+                        "scale": {"enum": ["linear", "log"]}
+                    },
+                    "required": ["range"],
+                    "additionalProperties": false
+                },
+                {
+                    "type": "object",
+                    "properties": {"choices": {"type": "array", "minItems": 1}},
+                    "required": ["choices"],
+                    "additionalProperties": false
+                }
+            ]
+        }
     })
 }
 

@@ -141,6 +141,7 @@ pub fn run(args: &StudyArgs, printer: &Printer) -> Result<ExitCode> {
     let out = args.work.join(&study.name);
     refuse_inputs_among_outputs(&study, args, &out)?;
     std::fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
+    report_design(&study, &out, printer)?;
     if let Some(crate::cli::ExportFormat::Snakemake) = args.export {
         let dir = args
             .export_dir
@@ -341,8 +342,35 @@ pub fn collect(
             printer.line(&line);
         }
     }
+    crate::study_results::write(study, work, out, printer)?;
     printer.line(&format!("study tables and plots: {}", out.display()));
     Ok(outcomes)
+}
+
+/// A sampled or sensitivity study's design, before its cases run: how it
+/// was drawn, and each draw outside the design bounds with the reason and
+/// what replaced it (designs.csv and rejected.csv say the same).
+fn report_design(study: &Study, out: &Path, printer: &Printer) -> Result<()> {
+    let Some(design) = &study.design else {
+        return Ok(());
+    };
+    crate::study_results::write_design(study, design, out)?;
+    printer.line(&format!("design: {}", design.plan.describe()));
+    for r in &design.points.rejected {
+        let values: Vec<String> = design
+            .axes
+            .iter()
+            .zip(&r.values)
+            .map(|(a, v)| format!("{} = {}", a.key, a.show(v)))
+            .collect();
+        printer.line(&format!(
+            "design: {} ({}) is outside the design bounds and was replaced by the next draw: {}",
+            r.draw,
+            values.join(", "),
+            r.reason
+        ));
+    }
+    Ok(())
 }
 
 /// The quantities a convergence study estimates, as (name, pointer into

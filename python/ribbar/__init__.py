@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING, Any
 from ribbar._native import __version__
 
 __all__ = [
+    "BOND_LAW_UNITS",
     "CURVE_UNITS",
     "MATERIAL_UNITS",
     "FieldFiles",
@@ -31,6 +32,7 @@ __all__ = [
 
 if TYPE_CHECKING:
     from ribbar._api import (
+        BOND_LAW_UNITS,
         CURVE_UNITS,
         MATERIAL_UNITS,
         FieldFiles,

@@ -38,6 +38,17 @@ CURVE_UNITS: Dict[str, str] = {
     "dissipated": "J",
 }
 
+#: Units of the bond-law parameters (SI).
+BOND_LAW_UNITS: Dict[str, str] = {
+    "tau_max": "Pa",
+    "s1": "m",
+    "s2": "m",
+    "s3": "m",
+    "alpha": "1",
+    "tau_f": "Pa",
+    "fit_error": "1",
+}
+
 #: Units of a material-point table's columns (SI; strains as tensor components).
 MATERIAL_UNITS: Dict[str, str] = {
     "t": "1",
@@ -147,6 +158,34 @@ class Result:
         )
 
     @property
+    def bond_law(self) -> pd.Series:
+        """The MC2010 bond-slip form fitted to the curve (`bond_law.json`):
+        tau_max, s1, s2, s3, alpha, tau_f and fit_error, SI; the parameters
+        the curve does not determine in `attrs["unidentified"]`, the whole
+        file in `attrs["bond_law"]`. Empty when the run has no fit (its
+        reason in `attrs["none"]`)."""
+        report = _read_json(self.directory / "bond_law.json")
+        fit = report.get("mc2010") or {}
+        names = ["tau_max", "s1", "s2", "s3", "alpha", "tau_f", "fit_error"]
+        series = pd.Series({k: fit[k] for k in names if k in fit}, dtype=float, name=self.scene)
+        series.attrs["units"] = {k: BOND_LAW_UNITS[k] for k in series.index}
+        series.attrs["unidentified"] = list(fit.get("unidentified", []))
+        series.attrs["none"] = fit.get("none")
+        series.attrs["bond_law"] = report
+        return series
+
+    @property
+    def bond_law_points(self) -> pd.DataFrame:
+        """The piecewise-linear bond law fitted to the curve: its points
+        (slip m, bond_stress Pa) from the origin; its error in
+        `attrs["fit_error"]`."""
+        law = _read_json(self.directory / "bond_law.json").get("piecewise_linear") or {}
+        frame = pd.DataFrame(law.get("points", []), columns=["slip", "bond_stress"])
+        frame.attrs["units"] = {"slip": "m", "bond_stress": "Pa"}
+        frame.attrs["fit_error"] = law.get("fit_error")
+        return frame
+
+    @property
     def fields(self) -> Dict[Union[int, str], FieldFiles]:
         """The written field steps: by step number, and as "peak" and "end"."""
         directory = self.directory / "fields"
@@ -216,13 +255,20 @@ class Result:
 
 @dataclass
 class StudyResult:
-    """A study's table (SI, units in `table.attrs["units"]`) and its cases."""
+    """A study's table (SI, units in `table.attrs["units"]`), its cases, and
+    what its kind adds: the bond laws of every case, a sampled study's
+    designs and responses, a sensitivity study's indices."""
 
     work: Path
     name: str
     table: pd.DataFrame
     cases: Dict[str, Result]
     elapsed_s: float = 0.0
+    #: `sweep`, `convergence`, `sample` or `sensitivity`.
+    kind: str = "sweep"
+    #: A sampled or sensitivity study's design as the study file resolves
+    #: it: `plan`, parameter `units`, `responses`, `rejected` draws.
+    design: Optional[Dict[str, Any]] = None
 
     @property
     def directory(self) -> Path:
@@ -235,6 +281,54 @@ class StudyResult:
         uncertainty), else None."""
         path = self.directory / "convergence.csv"
         return pd.read_csv(path) if path.is_file() else None
+
+    @property
+    def bond_laws(self) -> pd.DataFrame:
+        """`bond_laws.csv`: per case its parameters, the fitted MC2010 law
+        (`mc2010_*`, with the parameters its curve does not determine in
+        `mc2010_unidentified`), the piecewise law's error and points, the
+        design code's law (`code_*`, `fcm`) and the fitted tau_max as a
+        share of 2.5 sqrt(f_cm), all SI."""
+        return self._csv("bond_laws.csv")
+
+    @property
+    def responses(self) -> Optional[pd.DataFrame]:
+        """A sampled or sensitivity study's `responses.csv`: per case
+        whether it counts (its solve completed), its f_R and each response,
+        SI (units in `attrs["units"]`); else None."""
+        frame = self._csv("responses.csv", missing_ok=True)
+        if frame is not None and self.design:
+            frame.attrs["units"] = {r["name"]: r["unit"] for r in self.design["responses"]}
+        return frame
+
+    @property
+    def designs(self) -> Optional[pd.DataFrame]:
+        """A sampled or sensitivity study's `designs.csv`: per case its role
+        in the design, its unit-cube coordinates (`u_KEY`) and its values
+        (SI); else None."""
+        return self._csv("designs.csv", missing_ok=True)
+
+    @property
+    def rejected(self) -> Optional[pd.DataFrame]:
+        """The draws outside the design bounds (`rejected.csv`), each with
+        the spec's reason; they were replaced by the next draws."""
+        return self._csv("rejected.csv", missing_ok=True)
+
+    @property
+    def sensitivity(self) -> Optional[pd.DataFrame]:
+        """A sensitivity study's `sensitivity.csv`: per parameter and
+        response S1, S1_conf, ST, ST_conf and rows (Sobol'), or mu_star,
+        sigma, mu, mu_star_conf and effects (Morris); the estimators and the
+        cases left out are stated in `sensitivity.md`. Else None."""
+        return self._csv("sensitivity.csv", missing_ok=True)
+
+    def _csv(self, name: str, missing_ok: bool = False) -> Optional[pd.DataFrame]:
+        path = self.directory / name
+        if not path.is_file():
+            if missing_ok:
+                return None
+            raise RibbarError(f"{path}: missing; run the study first")
+        return pd.read_csv(path, **_CSV_OPTIONS)
 
 
 def run(
@@ -293,7 +387,10 @@ def study(
     progress: bool = True,
 ) -> StudyResult:
     """Runs a study as `ribbar study STUDY` does (cases as child processes,
-    shared stages cached) and returns its table and per-case results.
+    shared stages cached) and returns its table and per-case results, with
+    every case's bond laws (`bond_laws`), a sampled study's designs and
+    responses (`designs`, `responses`, `rejected`) and a sensitivity
+    study's indices (`sensitivity`) as DataFrames.
 
     `study` is a study file or a mapping; a mapping's `base` is taken
     relative to the current directory."""
@@ -319,12 +416,18 @@ def study(
     for case in plan["cases"]:
         if (work / case["name"] / "curve.csv").is_file():
             cases[case["name"]] = Result(work=work, scene=case["name"])
+    design = plan.get("design")
     return StudyResult(
         work=work,
         name=plan["name"],
-        table=_si_table(pd.read_csv(table_path, **_CSV_OPTIONS)),
+        table=_si_table(
+            pd.read_csv(table_path, **_CSV_OPTIONS),
+            parameter_units=(design or {}).get("units"),
+        ),
         cases=cases,
         elapsed_s=time.perf_counter() - start,
+        kind=plan.get("kind", "sweep"),
+        design=design,
     )
 
 
@@ -484,10 +587,14 @@ def _error_message(output: str, argv: List[str]) -> str:
     return f"ribbar {' '.join(argv)} failed:\n{tail}"
 
 
-def _si_table(table: pd.DataFrame) -> pd.DataFrame:
+def _si_table(table: pd.DataFrame, parameter_units: Optional[Mapping[str, str]] = None) -> pd.DataFrame:
     units: Dict[str, str] = {}
     renamed = {}
     for column in table.columns:
+        if parameter_units and column in parameter_units:
+            # A sampled spec key: SI, in the unit its range was written in.
+            units[column] = parameter_units[column] or "as written"
+            continue
         if "." in column:
             # A swept spec key, as written in the study.
             units[column] = "as written"

@@ -24,7 +24,10 @@ fn resolve_scene(spec: &str, overrides: Vec<String>) -> PyResult<String> {
 }
 
 /// A study file's name, kind and cases (name, overrides, swept values as
-/// written), as JSON; a bad study raises `ValueError` with the CLI's message.
+/// written, or sampled values in SI), as JSON; a sampled or sensitivity
+/// study adds its parameters' SI units, its responses with theirs, its
+/// design and the draws outside the design bounds. A bad study raises
+/// `ValueError` with the CLI's message.
 #[pyfunction]
 fn resolve_study(study: &str) -> PyResult<String> {
     let study = pipeline::study::Study::load(Path::new(study))
@@ -40,11 +43,21 @@ fn resolve_study(study: &str) -> PyResult<String> {
             })
         })
         .collect();
+    let design = study.design.as_ref().map(|d| {
+        serde_json::json!({
+            "plan": d.plan.describe(),
+            "units": d.axes.iter().map(|a| (a.key.clone(), serde_json::json!(a.unit()))).collect::<serde_json::Map<_, _>>(),
+            "responses": d.responses.iter().map(|r| serde_json::json!({"name": r.name(), "unit": r.unit()})).collect::<Vec<_>>(),
+            "rejected": d.points.rejected.iter().map(|r| serde_json::json!({"draw": r.draw, "reason": r.reason})).collect::<Vec<_>>(),
+        })
+    });
     Ok(serde_json::json!({
         "name": study.name,
         "base": study.base,
+        "kind": study.kind.name(),
         "convergence": study.kind == pipeline::study::StudyKind::Convergence,
         "cases": cases,
+        "design": design,
     })
     .to_string())
 }

@@ -24,16 +24,16 @@ use std::sync::OnceLock;
 pub const FONT_FAMILY: &str = "sans-serif";
 
 /// Size of single-panel plots, px (SVG user units).
-const SIZE: (u32, u32) = (900, 650);
+pub(super) const SIZE: (u32, u32) = (900, 650);
 /// Size of the two-panel interface plot.
 const WIDE: (u32, u32) = (1400, 600);
 
-const AXIS_TITLE: u32 = 22;
-const TICK_LABEL: u32 = 17;
-const LEGEND: u32 = 17;
+pub(super) const AXIS_TITLE: u32 = 22;
+pub(super) const TICK_LABEL: u32 = 17;
+pub(super) const LEGEND: u32 = 17;
 
 /// Series colours: black first, as single-curve figures are in papers.
-const PALETTE: [RGBColor; 8] = [
+pub(super) const PALETTE: [RGBColor; 8] = [
     RGBColor(0, 0, 0),
     RGBColor(200, 30, 30),
     RGBColor(30, 80, 200),
@@ -189,9 +189,9 @@ pub fn ensure_font() -> Result<PathBuf, PostError> {
 
 // ------------------------------------------------------------ rendering --
 
-type DrawResult = Result<(), Box<dyn Error>>;
+pub(super) type DrawResult = Result<(), Box<dyn Error>>;
 
-fn render_png<F>(path: &Path, size: (u32, u32), draw: F) -> Result<(), PostError>
+pub(super) fn render_png<F>(path: &Path, size: (u32, u32), draw: F) -> Result<(), PostError>
 where
     F: FnOnce(&DrawingArea<BitMapBackend<'_>, Shift>) -> DrawResult,
 {
@@ -215,7 +215,7 @@ where
     commit(&tmp, path)
 }
 
-fn render_svg<F>(path: &Path, size: (u32, u32), draw: F) -> Result<(), PostError>
+pub(super) fn render_svg<F>(path: &Path, size: (u32, u32), draw: F) -> Result<(), PostError>
 where
     F: FnOnce(&DrawingArea<SVGBackend<'_>, Shift>) -> DrawResult,
 {
@@ -251,7 +251,7 @@ fn marker_indices(n: usize, series: usize) -> impl Iterator<Item = usize> {
 
 /// Draws one series (line plus sparse markers) with its legend entry; the
 /// marker shape cycles with `index`.
-fn draw_series<'a, DB, X, Y>(
+pub(super) fn draw_series<'a, DB, X, Y>(
     chart: &mut ChartContext<'a, DB, Cartesian2d<X, Y>>,
     points: &[(f64, f64)],
     index: usize,
@@ -327,7 +327,7 @@ where
 }
 
 /// (min, max) of `values` padded for plotting; a degenerate span gets a unit width.
-fn padded_range(values: impl Iterator<Item = f64>, include_zero: bool) -> (f64, f64) {
+pub(super) fn padded_range(values: impl Iterator<Item = f64>, include_zero: bool) -> (f64, f64) {
     let (mut lo, mut hi) = values.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
         (a.min(v), b.max(v))
     });
@@ -350,7 +350,7 @@ fn padded_range(values: impl Iterator<Item = f64>, include_zero: bool) -> (f64, 
 }
 
 /// Tick label with no more digits than the tick spacing needs.
-fn tick(v: &f64) -> String {
+pub(super) fn tick(v: &f64) -> String {
     let s = format!("{:.3}", v);
     let s = s.trim_end_matches('0').trim_end_matches('.');
     if s == "-0" {
@@ -360,7 +360,7 @@ fn tick(v: &f64) -> String {
     }
 }
 
-fn check_finite(what: &str, values: impl Iterator<Item = f64>) -> Result<(), PostError> {
+pub(super) fn check_finite(what: &str, values: impl Iterator<Item = f64>) -> Result<(), PostError> {
     for v in values {
         if !v.is_finite() {
             return Err(PostError::invalid(
@@ -390,7 +390,11 @@ fn check_curves(curves: &[(&str, &[CurveRow])]) -> Result<(), PostError> {
     Ok(())
 }
 
-fn draw_bond_slip<DB>(root: &DrawingArea<DB, Shift>, curves: &[(&str, &[CurveRow])]) -> DrawResult
+fn draw_bond_slip<DB>(
+    root: &DrawingArea<DB, Shift>,
+    curves: &[(&str, &[CurveRow])],
+    references: &[ReferenceCurve],
+) -> DrawResult
 where
     DB: DrawingBackend,
     DB::ErrorType: 'static,
@@ -406,8 +410,12 @@ where
                 .collect()
         })
         .collect();
+    let lines: Vec<Vec<(f64, f64)>> = references
+        .iter()
+        .map(|r| r.points.iter().map(|&(s, t)| (s * 1e3, t * 1e-6)).collect())
+        .collect();
     let (x0, x1) = padded_range(series.iter().flatten().map(|p| p.0), true);
-    let (y0, y1) = padded_range(series.iter().flatten().map(|p| p.1), true);
+    let (y0, y1) = padded_range(series.iter().chain(&lines).flatten().map(|p| p.1), true);
     let mut chart = ChartBuilder::on(root)
         .margin(20)
         .x_label_area_size(65)
@@ -418,9 +426,20 @@ where
         "Free-end displacement FED (mm)",
         "Mean bond stress σ_mb (MPa)",
     )?;
-    let legend = curves.len() > 1;
+    // A legend of more curves than this would cover the plot; a study's
+    // table names its cases.
+    const MAX_LEGEND: usize = 12;
+    let legend = (curves.len() > 1 && curves.len() <= MAX_LEGEND) || !references.is_empty();
     for (i, ((label, _), pts)) in curves.iter().zip(&series).enumerate() {
         draw_series(&mut chart, pts, i, legend.then_some(*label))?;
+    }
+    for (i, (reference, pts)) in references.iter().zip(&lines).enumerate() {
+        let color = PALETTE[(curves.len() + i) % PALETTE.len()];
+        let style = color.stroke_width(2);
+        chart
+            .draw_series(DashedLineSeries::new(pts.iter().copied(), 10, 6, style))?
+            .label(reference.label.as_str())
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 26, y)], style));
     }
     frame(&mut chart, (x0, x1), (y0, y1))?;
     if legend {
@@ -429,7 +448,7 @@ where
     Ok(())
 }
 
-fn style_mesh<'a, DB>(
+pub(super) fn style_mesh<'a, DB>(
     chart: &mut ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
     x_desc: &str,
     y_desc: &str,
@@ -456,7 +475,7 @@ where
 }
 
 /// A black box around the plotting area.
-fn frame<'a, DB, X, Y>(
+pub(super) fn frame<'a, DB, X, Y>(
     chart: &mut ChartContext<'a, DB, Cartesian2d<X, Y>>,
     (x0, x1): (f64, f64),
     (y0, y1): (f64, f64),
@@ -474,7 +493,9 @@ where
     Ok(())
 }
 
-fn draw_legend<'a, DB, X, Y>(chart: &mut ChartContext<'a, DB, Cartesian2d<X, Y>>) -> DrawResult
+pub(super) fn draw_legend<'a, DB, X, Y>(
+    chart: &mut ChartContext<'a, DB, Cartesian2d<X, Y>>,
+) -> DrawResult
 where
     DB: DrawingBackend + 'a,
     DB::ErrorType: 'static,
@@ -493,16 +514,55 @@ where
     Ok(())
 }
 
+/// A law drawn as a dashed line beside the curves (a design code's, a fit).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ReferenceCurve {
+    /// Legend text.
+    pub label: String,
+    /// (slip m, τ Pa).
+    pub points: Vec<(f64, f64)>,
+}
+
 /// Writes the σ_mb–FED plot (MPa against mm) as PNG.
 pub fn bond_slip_png(curves: &[(&str, &[CurveRow])], png: &Path) -> Result<(), PostError> {
-    check_curves(curves)?;
-    render_png(png, SIZE, |root| draw_bond_slip(root, curves))
+    bond_slip_with_laws_png(curves, &[], png)
 }
 
 /// Writes the σ_mb–FED plot (MPa against mm) as SVG.
 pub fn bond_slip_svg(curves: &[(&str, &[CurveRow])], svg: &Path) -> Result<(), PostError> {
+    bond_slip_with_laws_svg(curves, &[], svg)
+}
+
+fn check_references(references: &[ReferenceCurve]) -> Result<(), PostError> {
+    for r in references {
+        check_finite(
+            &format!("law `{}`", r.label),
+            r.points.iter().flat_map(|p| [p.0, p.1]),
+        )?;
+    }
+    Ok(())
+}
+
+/// The σ_mb–FED plot with `references` (laws) drawn dashed, as PNG.
+pub fn bond_slip_with_laws_png(
+    curves: &[(&str, &[CurveRow])],
+    references: &[ReferenceCurve],
+    png: &Path,
+) -> Result<(), PostError> {
     check_curves(curves)?;
-    render_svg(svg, SIZE, |root| draw_bond_slip(root, curves))
+    check_references(references)?;
+    render_png(png, SIZE, |root| draw_bond_slip(root, curves, references))
+}
+
+/// The σ_mb–FED plot with `references` (laws) drawn dashed, as SVG.
+pub fn bond_slip_with_laws_svg(
+    curves: &[(&str, &[CurveRow])],
+    references: &[ReferenceCurve],
+    svg: &Path,
+) -> Result<(), PostError> {
+    check_curves(curves)?;
+    check_references(references)?;
+    render_svg(svg, SIZE, |root| draw_bond_slip(root, curves, references))
 }
 
 /// Mean bond stress against free-end displacement for one or several

@@ -229,7 +229,9 @@ impl StudyCase {
     /// A case from its swept parameters (spec key, value as written in the
     /// study file) and its `summary.json`. Summary columns: the entries of
     /// [`CurveSummary::table_entries`](super::summary::CurveSummary::table_entries)
-    /// from the `curve` object, then `dofs` and `solve_wall_time_s` when the
+    /// from the `curve` object, the bond-law columns of
+    /// [`bond_law_entries`](super::bond_law::bond_law_entries), then `dofs` and
+    /// `solve_wall_time_s` when the
     /// summary has `solver.summary.dofs` and `solver.summary.wall_time_s.total`.
     /// A summary without a readable `curve` object gives only what is found.
     pub fn from_summary(
@@ -242,6 +244,7 @@ impl StudyCase {
             .and_then(|c| serde_json::from_value::<super::summary::CurveSummary>(c.clone()).ok())
             .map(|c| c.table_entries())
             .unwrap_or_default();
+        entries.extend(super::bond_law::bond_law_entries(summary));
         for (name, pointer) in [
             ("dofs", "/solver/summary/dofs"),
             ("solve_wall_time_s", "/solver/summary/wall_time_s/total"),

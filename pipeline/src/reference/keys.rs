@@ -118,6 +118,7 @@ fn field_orders() -> HashMap<&'static str, &'static [&'static str]> {
         ("RawOutputs", f::<crate::outputs::RawOutputs>()),
         ("RawFields", f::<crate::outputs::RawFields>()),
         ("RawStudy", f::<crate::study::RawStudy>()),
+        ("RawSampler", f::<crate::study::RawSampler>()),
     ])
 }
 

@@ -17,7 +17,7 @@ impl Stage {
             // 3: mesh.vtu's `region` is 0 steel, 1 concrete, as in the fields.
             Stage::Mesh => 3,
             Stage::Solve => 12,
-            Stage::Post => 2,
+            Stage::Post => 3,
         }
     }
 
@@ -29,6 +29,8 @@ impl Stage {
             // solver puts there.
             Stage::Geometry => (&["/bar", "/specimen"], &["/specimen/non_adhesive"]),
             Stage::Mesh => (&["/mesh"], &[]),
+            // f_cm only sets the design code's law beside the curve: post
+            // reads it (resolved and as written), the solve does not.
             Stage::Solve => (
                 &[
                     "/specimen/non_adhesive",
@@ -37,9 +39,16 @@ impl Stage {
                     "/solver",
                     "/outputs/fields",
                 ],
+                &["/materials/concrete_fcm", "/materials/concrete/fcm"],
+            ),
+            Stage::Post => (
+                &[
+                    "/outputs/post",
+                    "/materials/concrete_fcm",
+                    "/materials/concrete/fcm",
+                ],
                 &[],
             ),
-            Stage::Post => (&["/outputs/post"], &[]),
         }
     }
 
@@ -130,6 +139,36 @@ fn slot<'v>(tree: &'v mut Value, pointer: &str) -> &'v mut Value {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `materials.concrete.fcm` and the post options change post's key
+    /// alone: the stored solves of a scene stay its solves.
+    #[test]
+    fn fcm_and_bond_options_rerun_post_only() {
+        let spec = "name: s\nbar: {kind: smooth, diameter: 8 mm}\n";
+        let path = std::path::Path::new("s.yaml");
+        let keys = |sets: &[&str]| {
+            let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
+            Keys::of(&Scene::from_yaml(spec, path, &sets).unwrap(), "4.15.2")
+        };
+        let plain = keys(&[]);
+        for sets in [
+            &["materials.concrete.fcm=40 MPa"][..],
+            &["outputs.bond_conditions=other"],
+            &["outputs.bond_law_points=5"],
+        ] {
+            let changed = keys(sets);
+            assert_eq!(
+                changed.get(Stage::Solve).key,
+                plain.get(Stage::Solve).key,
+                "{sets:?}"
+            );
+            assert_ne!(
+                changed.get(Stage::Post).key,
+                plain.get(Stage::Post).key,
+                "{sets:?}"
+            );
+        }
+    }
 
     #[test]
     fn select_keeps_the_nesting_and_drops_the_ignored_parts() {

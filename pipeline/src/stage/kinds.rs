@@ -55,7 +55,12 @@ impl Stage {
             Stage::Geometry => &["specimen.geo", "geometry.json"],
             Stage::Mesh => &["specimen.msh", "model.bin", "mesh.vtu", "mesh.json"],
             Stage::Solve => &["curve.csv", "solve.json", "fields"],
-            Stage::Post => &["summary.json", "plots", "interface_profile.csv"],
+            Stage::Post => &[
+                "summary.json",
+                "bond_law.json",
+                "plots",
+                "interface_profile.csv",
+            ],
         }
     }
 

@@ -5,6 +5,7 @@
 //! into its key, writes into the store's in-progress directory, commits by
 //! one rename and publishes its files under `WORK/<scene>/`.
 
+mod bond_law;
 mod ctx;
 pub mod folder;
 mod geometry;

@@ -1,7 +1,9 @@
-//! The post stage: `summary.json` (curve quantities, the solver's counts and
-//! wall times, the upstream stages' timings) and the plots, from the solve
-//! stage's files only.
+//! The post stage: `summary.json` (curve quantities, the bond laws and the
+//! design code's, the solver's counts and wall times, the upstream stages'
+//! timings), `bond_law.json` and the plots, from the solve stage's files
+//! (and the geometry's f_R) only.
 
+use super::bond_law::BondLaws;
 use super::ctx::Ctx;
 use super::kinds::Stage;
 use crate::outputs::PlotFormat;
@@ -66,6 +68,11 @@ pub fn run(ctx: &Ctx, out: &Path) -> Result<()> {
             residual_fraction: request.residual_fraction,
         },
     )?;
+    let laws = BondLaws::of(ctx, &rows);
+    crate::store::write_atomic(
+        &out.join("bond_law.json"),
+        &serde_json::to_vec_pretty(&laws.to_json())?,
+    )?;
     let stage_time = |stage: Stage| -> Value {
         ctx.store
             .wall_time(ctx.keys.get(stage))
@@ -75,6 +82,9 @@ pub fn run(ctx: &Ctx, out: &Path) -> Result<()> {
         "scene": ctx.scene.name,
         "units": "SI (Pa, m, N, J/m^2, s)",
         "curve": curve,
+        "bond_law": laws.to_json(),
+        "design_code": laws.design_summary(curve.peak_bond_stress),
+        "geometry": {"f_R": laws.f_r},
         "solver": solve,
         "stage_wall_time_s": {
             "geometry": stage_time(Stage::Geometry),
@@ -98,16 +108,25 @@ pub fn run(ctx: &Ctx, out: &Path) -> Result<()> {
     } else {
         Vec::new()
     };
+    let references = laws.references();
     for format in &request.plots {
         match format {
             PlotFormat::Png => {
-                post::bond_slip_png(&[(label, &rows)], &plots.join("bond_slip.png"))?;
+                post::bond_slip_with_laws_png(
+                    &[(label, &rows)],
+                    &references,
+                    &plots.join("bond_slip.png"),
+                )?;
                 if !profiles.is_empty() {
                     post::interface_line_png(&profiles, &plots.join("interface_profile.png"))?;
                 }
             }
             PlotFormat::Svg => {
-                post::bond_slip_svg(&[(label, &rows)], &plots.join("bond_slip.svg"))?;
+                post::bond_slip_with_laws_svg(
+                    &[(label, &rows)],
+                    &references,
+                    &plots.join("bond_slip.svg"),
+                )?;
                 if !profiles.is_empty() {
                     post::interface_line_svg(&profiles, &plots.join("interface_profile.svg"))?;
                 }
@@ -130,5 +149,6 @@ pub fn run(ctx: &Ctx, out: &Path) -> Result<()> {
                 r / 1e6
             ))
     ));
+    ctx.printer.line(&laws.line());
     Ok(())
 }

@@ -211,6 +211,7 @@ fn concrete_from(p: &RawParameters) -> RawConcrete {
         // A material point is driven at its own element size `l`.
         regularisation_length: None,
         nonlocal_length: None,
+        fcm: None,
     }
 }
 

@@ -131,6 +131,10 @@ pub struct RawConcrete {
     /// h ≲ ℓ where the concrete damages (length; default none: each point's
     /// own strain, as the paper; > 0).
     pub nonlocal_length: Option<RawQuantity>,
+    /// Mean compressive strength f_cm, for the design code's bond law that
+    /// post draws beside the curve; the solve does not read it (stress;
+    /// default from the Mazars tensile strength by MC2010's f_ctm; > 0).
+    pub fcm: Option<RawQuantity>,
 }
 
 /// `materials.steel` as written.
@@ -273,6 +277,11 @@ pub struct Materials {
     pub concrete: ConcreteModel,
     pub steel: SteelModel,
     pub interface: InterfaceModel,
+    /// `materials.concrete.fcm`, Pa: read by post alone (the design code's
+    /// bond law), so it is kept out of the concrete law and out of the
+    /// serialised scene when not given.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub concrete_fcm: Option<f64>,
 }
 
 /// What the interface of the non-adhesive zone z ∈ [l_adh, L] does
@@ -828,6 +837,18 @@ fn elastic_interface(raw: &RawInterface, k: &Keys) -> Result<AnyInterfaceLaw, Ma
     }))
 }
 
+/// `materials.concrete.fcm`, Pa: above the 8 MPa by which MC2010's f_ck
+/// falls short of it.
+fn resolve_fcm(raw: &RawConcrete) -> Result<Option<f64>, MaterialsSpecError> {
+    let k = Keys {
+        prefix: "materials.concrete",
+        law: raw.law.as_deref().unwrap_or("mazars"),
+    };
+    k.get(&raw.fcm, "fcm", Dim::Stress)?
+        .map(|fcm| k.check("fcm", fcm, fcm > 8e6, "> 8 MPa (f_ck = f_cm - 8 MPa > 0)"))
+        .transpose()
+}
+
 impl RawMaterials {
     /// Resolves units, defaults, bounds and the interface calibration.
     pub fn resolve(&self) -> Result<Materials, MaterialsSpecError> {
@@ -838,6 +859,7 @@ impl RawMaterials {
             concrete,
             steel,
             interface,
+            concrete_fcm: resolve_fcm(&self.concrete)?,
         })
     }
 }
@@ -854,6 +876,30 @@ mod tests {
 
     fn err(yaml: &str) -> String {
         resolve(yaml).unwrap_err().to_string()
+    }
+
+    /// `fcm` resolves to Pa for any concrete law, is checked against
+    /// MC2010's f_ck > 0, and leaves the serialised materials (the solve's
+    /// key) as they were when absent.
+    #[test]
+    fn fcm_is_read_for_the_design_code_only() {
+        let m = resolve("concrete: {fcm: 38 MPa}").unwrap();
+        assert_eq!(m.concrete_fcm, Some(38e6));
+        let elastic =
+            resolve("concrete: {law: elastic, fcm: 38 MPa}\ninterface: {ft: 2 MPa, Gf: 90 N/m}")
+                .unwrap();
+        assert_eq!(elastic.concrete_fcm, Some(38e6));
+        let err = err("concrete: {fcm: 6 MPa}");
+        assert!(
+            err.contains("materials.concrete.fcm") && err.contains("8 MPa"),
+            "{err}"
+        );
+        let plain = serde_json::to_value(resolve("{}").unwrap()).unwrap();
+        assert!(plain.get("concrete_fcm").is_none(), "{plain}");
+        assert_eq!(
+            serde_json::to_value(m.concrete).unwrap(),
+            serde_json::to_value(resolve("{}").unwrap().concrete).unwrap()
+        );
     }
 
     /// `nonlocal_length` reads a positive length, needs a fixed
