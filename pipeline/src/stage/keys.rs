@@ -52,6 +52,19 @@ impl Stage {
         }
     }
 
+    /// The same as [`Stage::reads`] in the spec as written, where `status`
+    /// names the keys a user changed: post's options are written directly
+    /// under `outputs` (beside `fields`), resolved into `outputs.post`.
+    fn reads_as_written(self) -> (&'static [&'static str], &'static [&'static str]) {
+        match self {
+            Stage::Post => (
+                &["/outputs", "/materials/concrete/fcm"],
+                &["/outputs/fields"],
+            ),
+            _ => self.reads(),
+        }
+    }
+
     /// Whether gmsh's version changes the stage's result.
     fn uses_gmsh(self) -> bool {
         matches!(self, Stage::Geometry | Stage::Mesh)
@@ -86,7 +99,8 @@ impl Keys {
             if let Some(up) = stage.upstream() {
                 inputs.insert(up.name().into(), json!(keys[up as usize].key));
             }
-            let written = select(&scene.written, reads, ignores);
+            let (written_reads, written_ignores) = stage.reads_as_written();
+            let written = select(&scene.written, written_reads, written_ignores);
             keys.push(
                 StageKey::new(stage.name(), Value::Object(inputs))
                     .with_written(Value::Object(written)),
@@ -168,6 +182,30 @@ mod tests {
                 "{sets:?}"
             );
         }
+    }
+
+    /// A post option changed on the command line is named as the user
+    /// wrote it (`outputs.energy_fed_limit`), not by its resolved place.
+    #[test]
+    fn post_options_are_named_as_written() {
+        let spec = "name: s\nbar: {kind: smooth, diameter: 8 mm}\n";
+        let path = std::path::Path::new("s.yaml");
+        let keys = |sets: &[&str]| {
+            let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
+            Keys::of(&Scene::from_yaml(spec, path, &sets).unwrap(), "4.15.2")
+        };
+        let (old, new) = (keys(&[]), keys(&["outputs.energy_fed_limit=2 mm"]));
+        let changed = crate::store::changed_keys(
+            &old.get(Stage::Post).written,
+            &new.get(Stage::Post).written,
+        );
+        assert_eq!(changed, ["outputs.energy_fed_limit"]);
+        let fields = keys(&["outputs.fields.at_end=false"]);
+        assert!(crate::store::changed_keys(
+            &old.get(Stage::Post).written,
+            &fields.get(Stage::Post).written
+        )
+        .is_empty());
     }
 
     #[test]
