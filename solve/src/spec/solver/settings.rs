@@ -65,7 +65,7 @@ pub struct Loading {
     pub curve_error: CurveError,
 }
 
-/// What `loading.curve_tolerance` bounds (docs/solver.md, "Resolving the
+/// What `loading.curve_tolerance` bounds (docs/src/validation/solver.md, "Resolving the
 /// curve").
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -86,7 +86,7 @@ impl CurveError {
     }
 }
 
-/// `loading.curve_tolerance` unless a scene sets it (docs/solver.md,
+/// `loading.curve_tolerance` unless a scene sets it (docs/src/validation/solver.md,
 /// "Resolving the curve").
 pub const DEFAULT_CURVE_TOLERANCE: f64 = 3e-3;
 
@@ -214,7 +214,7 @@ pub enum ConcreteIntegration {
     /// converged steps (never below the last one), so the concrete is linear
     /// within a step; the damage history is still integrated implicitly.
     /// First-order in the step size: its curve error is measured against
-    /// the implicit one (docs/solver.md).
+    /// the implicit one (docs/src/validation/solver.md).
     ImplEx,
 }
 
@@ -231,11 +231,11 @@ pub enum InterfaceIntegration {
     /// (never below the last one), so the interface's damage does not
     /// switch between Newton iterates and its tangent does not soften;
     /// friction and contact stay implicit. The step control of
-    /// `impl_ex_tolerance` bounds its error (docs/solver.md).
+    /// `impl_ex_tolerance` bounds its error (docs/src/validation/solver.md).
     ImplEx,
 }
 
-/// What a load step prescribes (docs/solver.md, Path-following).
+/// What a load step prescribes (docs/src/validation/solver.md, Path-following).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default)]
 #[serde(rename_all = "snake_case")]
 pub enum PathFollowing {
@@ -277,7 +277,7 @@ pub enum PathFollowing {
 }
 
 /// When the solver holds the interface points whose regime keeps
-/// switching between Newton iterates (docs/solver.md, "Law switches").
+/// switching between Newton iterates (docs/src/validation/solver.md, "Law switches").
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default)]
 #[serde(rename_all = "snake_case", try_from = "RawInterfaceHolds")]
 pub enum InterfaceHolds {
@@ -406,7 +406,7 @@ pub struct SolverSettings {
     /// this take their damage from an extrapolation of their history
     /// (IMPL-EX) instead of the step's own: a degenerate tet's strain
     /// swings with displacements far below the tolerance, and its damage
-    /// then switches on and off between Newton iterates (docs/solver.md,
+    /// then switches on and off between Newton iterates (docs/src/validation/solver.md,
     /// "Law switches"). 0 disables; left out of the serialised form then.
     #[serde(default, skip_serializing_if = "is_zero")]
     pub sliver_quality: f64,
@@ -429,7 +429,7 @@ pub struct SolverSettings {
     /// − stored, over the whole specimen), or leaves forces out of balance
     /// whose work is, more than this fraction of its own external work
     /// plus 2e-3 of W_ext, reached a state the laws cannot reach from the
-    /// last one: it is refused like a failed attempt (docs/solver.md,
+    /// last one: it is refused like a failed attempt (docs/src/validation/solver.md,
     /// "Steps that create energy"). 0 disables.
     /// Always serialised, so that a change of it (or of its default)
     /// re-runs the solve.
@@ -440,7 +440,7 @@ pub struct SolverSettings {
 /// Default of `solver.expert.dissipation_tolerance`: above what the FCZM's
 /// non-potential exchange gives back in the kept steps of the sweeps and
 /// holdouts (at most 0.082 of a step's work), below the force jumps it
-/// refuses (0.21 to 3.9 of their step's work; docs/solver.md).
+/// refuses (0.21 to 3.9 of their step's work; docs/src/validation/solver.md).
 pub const DEFAULT_DISSIPATION_TOLERANCE: f64 = 0.15;
 
 fn default_dissipation_tolerance() -> f64 {
@@ -460,7 +460,7 @@ fn is_half_limit(r: &MultigridRebuild) -> bool {
 }
 
 /// Free DOFs from which `preconditioner: auto` takes the multigrid. Measured
-/// (docs/performance.md, "The multigrid as the Newton–Krylov
+/// (docs/src/validation/performance.md, "The multigrid as the Newton–Krylov
 /// preconditioner"): on R1 at the paper's mesh (412 k DOFs) the multigrid
 /// solve took 641 s and 2.06 GiB against 743 s and 7.6 GiB for the Cholesky
 /// route (that one on the earlier metre-built mesh), the same curve; on r1-coarse (54 k) both
@@ -501,10 +501,10 @@ fn is_implicit_interface(c: &InterfaceIntegration) -> bool {
 }
 
 /// Default of `solver.expert.impl_ex_reject` under `interface_integration:
-/// impl_ex` (docs/solver.md, "IMPL-EX interface").
+/// impl_ex` (docs/src/validation/solver.md, "IMPL-EX interface").
 pub const DEFAULT_IMPL_EX_REJECT: f64 = 2.0;
 
-/// Default of `solver.impl_ex_tolerance` (docs/solver.md, IMPL-EX).
+/// Default of `solver.impl_ex_tolerance` (docs/src/validation/solver.md, IMPL-EX).
 pub const DEFAULT_IMPL_EX_TOLERANCE: f64 = 1e-2;
 
 fn default_impl_ex_tolerance() -> f64 {
