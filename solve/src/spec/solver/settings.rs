@@ -4,6 +4,7 @@
 use crate::laws::TangentKind;
 use crate::linalg::Ordering;
 use geom::units::UnitError;
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 /// A `loading` or `solver` value that cannot be used.
@@ -67,7 +68,7 @@ pub struct Loading {
 
 /// What `loading.curve_tolerance` bounds (docs/src/validation/solver.md, "Resolving the
 /// curve").
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum CurveError {
     /// The shortest distance of a curve point from its neighbours' chord.
@@ -109,7 +110,7 @@ impl Default for Loading {
 }
 
 /// Linear solver of the Newton corrections.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum LinearSolverKind {
     /// Sparse Cholesky of every new matrix (of the symmetric part of an
@@ -126,10 +127,11 @@ pub enum LinearSolverKind {
 }
 
 /// What preconditions GMRES in the Newton–Krylov solver.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum PreconditionerKind {
-    /// `multigrid` from [`MULTIGRID_MIN_DOFS`] free DOFs on, else `cholesky`.
+    /// `multigrid` from 100 000 free DOFs on (`MULTIGRID_MIN_DOFS`), else
+    /// `cholesky`.
     #[default]
     Auto,
     /// A kept sparse Cholesky factor of the symmetric part (or the secant
@@ -143,7 +145,7 @@ pub enum PreconditionerKind {
 
 /// When the kept multigrid hierarchy is built anew between GMRES solves
 /// (besides when there is none and when GMRES fails with it).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum MultigridRebuild {
     /// After a solve that needed more than half of `krylov_max_iterations`.
@@ -151,7 +153,7 @@ pub enum MultigridRebuild {
     HalfLimit,
     /// Also once the solves since the last build have needed, beyond the
     /// iterations of the first of them, more GMRES iterations in all than
-    /// a build costs ([`REBUILD_COST_ITERATIONS`]), so that a hierarchy
+    /// a build costs (40, `REBUILD_COST_ITERATIONS`), so that a hierarchy
     /// built before the damage grew is renewed even when no single solve
     /// passes the half limit. A rebuild whose first solve needs no fewer
     /// iterations per decade of residual than the worn hierarchy's solves
@@ -166,7 +168,7 @@ pub const REBUILD_COST_ITERATIONS: usize = 40;
 
 /// How the GMRES tolerance of each Newton correction (the forcing term η)
 /// is chosen.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Forcing {
     /// η = `krylov_tolerance` for every correction.
@@ -188,7 +190,7 @@ pub enum Forcing {
 
 /// Floating-point precision of the kept Cholesky factor when it is applied
 /// as the GMRES preconditioner (the factorisation itself is always double).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Precision {
     /// L and the triangular solves in f64.
@@ -201,7 +203,7 @@ pub enum Precision {
 }
 
 /// Time integration of the Mazars concrete damage.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum ConcreteIntegration {
     /// Backward Euler: the stress of a step uses the damage of the step's
@@ -219,7 +221,7 @@ pub enum ConcreteIntegration {
 }
 
 /// Time integration of the interface damage (FCZM and Tvergaard λ̃).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum InterfaceIntegration {
     /// Backward Euler: the traction of a step uses the damage of the
@@ -236,7 +238,7 @@ pub enum InterfaceIntegration {
 }
 
 /// What a load step prescribes (docs/src/validation/solver.md, Path-following).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum PathFollowing {
     /// Every step prescribes the imposed displacement λ.
@@ -322,8 +324,29 @@ impl TryFrom<RawInterfaceHolds> for InterfaceHolds {
     }
 }
 
+/// The schema of what the parser reads (`RawInterfaceHolds`): a mode's
+/// name, or the first version's bool. Written out because the derive would
+/// take the schema of the untagged `RawInterfaceHolds`, whose mode is any
+/// string.
+impl JsonSchema for InterfaceHolds {
+    fn schema_name() -> std::borrow::Cow<'static, str> {
+        "InterfaceHolds".into()
+    }
+
+    fn json_schema(_: &mut schemars::SchemaGenerator) -> schemars::Schema {
+        schemars::json_schema!({
+            "oneOf": [
+                {"const": "off", "description": "Never: a step whose interface chatters is cut back, and stalls at the minimum step."},
+                {"const": "on_stall", "description": "From the first step that would otherwise stall at its minimum size to the end of the run; a run that gets through without them keeps its curve."},
+                {"const": "always", "description": "In the retries of every step."},
+                {"type": "boolean", "description": "The first form of the option: true is always, false is off."}
+            ]
+        })
+    }
+}
+
 /// First iterate of a load step.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Predictor {
     /// The last converged displacement with the new Dirichlet values.
