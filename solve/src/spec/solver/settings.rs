@@ -77,7 +77,7 @@ pub enum CurveError {
     /// Where the FED grows, the σ_mb distance of the point from the chord
     /// at its FED: the error of σ_mb read along FED, which on a steep rise
     /// or drop is many times the shortest distance. Elsewhere as
-    /// `Distance`.
+    /// `distance`.
     Stress,
 }
 
