@@ -835,6 +835,8 @@ mod tests {
         let word = |c: char| c.is_ascii_alphanumeric() || c == '_' || c == '.';
         text.split(|c: char| !word(c))
             .filter(|w| SECTIONS.iter().any(|s| w.starts_with(s)))
+            // File names (`solver.md`) are not keys.
+            .filter(|w| ![".md", ".json", ".yaml"].iter().any(|e| w.ends_with(e)))
             .map(|w| w.trim_end_matches('.').to_string())
             .collect()
     }
@@ -900,6 +902,22 @@ mod tests {
         // The check itself can fail: a key of an earlier layout is not found.
         assert!(!scene_has(&schema, "solver.max_iterations"));
         assert!(scene_has(&schema, "solver.expert.max_iterations"));
+    }
+
+    /// The user pages on stopping runs and on the solver name only scene
+    /// keys that exist.
+    #[test]
+    fn the_solver_pages_name_keys_that_exist() {
+        let schema = crate::scene::RawScene::schema();
+        let docs = Path::new(env!("CARGO_MANIFEST_DIR")).join("../docs/src");
+        for page in ["howto/when-a-run-stops.md", "explanation/solver.md"] {
+            let text = std::fs::read_to_string(docs.join(page)).expect(page);
+            let keys = keys_in(&text);
+            assert!(keys.len() > 10, "{page}: {keys:?}");
+            for key in keys {
+                assert!(scene_has(&schema, &key), "{page}: {key} is not a scene key");
+            }
+        }
     }
 
     /// Each cause of a stall names its own keys: the iteration limit
