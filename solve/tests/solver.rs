@@ -1642,7 +1642,7 @@ fn free_end_control_follows_a_snap_back_with_the_fed_growing() {
     struct Steps(Vec<(ControlMode, f64, CurveRow)>);
     impl Observer for Steps {
         fn step_converged(&mut self, r: &StepReport, _: &CommittedView<'_>) {
-            self.0.push((r.mode, r.step_size, r.row.clone()));
+            self.0.push((r.mode, r.step_size, r.row));
         }
     }
     let mut steps = Steps(Vec::new());
