@@ -4,22 +4,13 @@
 //! `ribbar` itself. Each key's description is its field's doc comment; the
 //! scene and study reference pages are written from the same schemas
 //! (`crate::reference`).
-//!
-//! A section whose raw type does not derive `JsonSchema` yet (`loading`,
-//! `solver`) is given the names of the keys its `Deserialize` accepts, with
-//! no types and no text, marked with [`UNDOCUMENTED`]: unknown keys are
-//! refused there too, and the reference says the section is not generated.
 
 use geom::spec::RawSpecimen;
 use schemars::generate::SchemaSettings;
 use schemars::{json_schema, JsonSchema, Schema, SchemaGenerator};
 use serde::de::{self, Deserializer, Visitor};
-use serde_json::{Map, Value};
+use serde_json::Value;
 use solve::spec::materials::NonAdhesive;
-use solve::spec::solver::{RawLoading, RawSolver};
-
-/// The schema keyword that marks a section without generated key docs.
-pub const UNDOCUMENTED: &str = "x-ribbar-undocumented";
 
 /// The root schema of a file whose raw type is `T` (`RawScene::schema`,
 /// `RawStudy::schema`).
@@ -66,31 +57,6 @@ pub struct SpecimenSection {
     /// stage, the geometry and the mesh do not depend on it (choice; default
     /// free).
     non_adhesive: Option<NonAdhesive>,
-}
-
-/// `loading`, until its raw type derives `JsonSchema`.
-pub fn loading_section(_: &mut SchemaGenerator) -> Schema {
-    undocumented_section::<RawLoading>()
-}
-
-/// `solver`, until its raw type derives `JsonSchema`.
-pub fn solver_section(_: &mut SchemaGenerator) -> Schema {
-    undocumented_section::<RawSolver>()
-}
-
-/// An object with the keys `T` deserialises, any values, nothing else.
-fn undocumented_section<T: de::DeserializeOwned>() -> Schema {
-    let mut properties = Map::new();
-    for name in struct_fields::<T>() {
-        properties.insert(name.to_string(), Value::Object(Map::new()));
-    }
-    let mut schema = json_schema!({
-        "type": "object",
-        "properties": properties,
-        "additionalProperties": false
-    });
-    schema.insert(UNDOCUMENTED.into(), true.into());
-    schema
 }
 
 /// A study's `parameters`: dotted keys, each with a non-empty list (sweep,

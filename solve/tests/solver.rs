@@ -1621,6 +1621,68 @@ fn dissipation_control_steps_are_capped_by_the_work_over_the_largest_step() {
     );
 }
 
+/// Free-end control (`solver.path_following: fed`) prescribes the FED:
+/// after the first step every step is FED-controlled and moves the FED by
+/// exactly its size, so the FED grows monotonically while λ, an unknown,
+/// turns back at the snap-back that displacement control cannot pass
+/// (`dissipation_control_follows_a_snap_back`); the run lands on
+/// `loading.fed_stop`.
+#[test]
+fn free_end_control_follows_a_snap_back_with_the_fed_growing() {
+    use solve::nonlinear::ControlMode;
+    let (m, laws, mut loading) = snap_back_case();
+    // Past the snap-back (measured near a FED of 5 µm), before the bar
+    // pulls free (near 8 µm).
+    let fed_stop = 6e-6;
+    loading.fed_stop = Some(fed_stop);
+    let settings = SolverSettings {
+        path_following: PathFollowing::Fed,
+        ..SolverSettings::default()
+    };
+    struct Steps(Vec<(ControlMode, f64, CurveRow)>);
+    impl Observer for Steps {
+        fn step_converged(&mut self, r: &StepReport, _: &CommittedView<'_>) {
+            self.0.push((r.mode, r.step_size, r.row));
+        }
+    }
+    let mut steps = Steps(Vec::new());
+    let res = solve_pullout(&m, &laws, &loading, &settings, None, &mut steps).unwrap();
+    assert!(matches!(res.ending, Ending::Completed), "{:?}", res.ending);
+    let steps = &steps.0;
+    assert_eq!(steps[0].0, ControlMode::Displacement);
+    let mut fed_steps = 0;
+    for w in steps.windows(2) {
+        let (mode, size, row) = (&w[1].0, w[1].1, &w[1].2);
+        assert!(
+            row.fed > w[0].2.fed,
+            "the FED fell: {:?} then {row:?}",
+            w[0].2
+        );
+        if *mode == ControlMode::FreeEnd {
+            let moved = row.fed - w[0].2.fed;
+            assert!(
+                (moved - size).abs() <= 1e-6 * size,
+                "a FED step of {size} m moved the FED by {moved} m"
+            );
+            fed_steps += 1;
+        }
+    }
+    assert_eq!(
+        fed_steps,
+        steps.len() - 1,
+        "every step after the first is FED-controlled"
+    );
+    let last = &steps.last().unwrap().2;
+    assert!((last.fed - fed_stop).abs() <= 1e-6 * fed_stop, "{last:?}");
+    // λ turned back on the way, to below half its largest value: the
+    // snap-back was followed, not jumped.
+    let largest = steps.iter().map(|s| s.2.u_imposed).fold(0.0, f64::max);
+    assert!(
+        last.u_imposed < 0.5 * largest,
+        "{last:?} after λ = {largest:e} m"
+    );
+}
+
 /// Progress reports name what each attempt prescribed: the cut-back where
 /// displacement control hands over says that the next attempt prescribes
 /// an energy (J), the attempt after it is dissipation-controlled, and a

@@ -2,7 +2,6 @@
 //! the raw spec types and from `geom::units::Dim`.
 
 use super::markdown::{cell, GENERATED};
-use crate::schema::UNDOCUMENTED;
 use serde_json::Value;
 use std::collections::HashMap;
 
@@ -93,8 +92,6 @@ struct Key<'s> {
     target: &'s Value,
     /// A mapping of further keys, listed after it.
     section: bool,
-    /// A section whose raw type has no generated docs yet.
-    undocumented: bool,
 }
 
 /// The field order of each raw type, as its `Deserialize` declares it
@@ -115,6 +112,9 @@ fn field_orders() -> HashMap<&'static str, &'static [&'static str]> {
         ("RawConcrete", f::<solve::spec::materials::RawConcrete>()),
         ("RawSteel", f::<solve::spec::materials::RawSteel>()),
         ("RawInterface", f::<solve::spec::materials::RawInterface>()),
+        ("RawLoading", f::<solve::spec::solver::RawLoading>()),
+        ("RawSolver", f::<solve::spec::solver::RawSolver>()),
+        ("RawExpert", f::<solve::spec::solver::RawExpert>()),
         ("RawOutputs", f::<crate::outputs::RawOutputs>()),
         ("RawFields", f::<crate::outputs::RawFields>()),
         ("RawStudy", f::<crate::study::RawStudy>()),
@@ -160,7 +160,6 @@ fn walk<'s>(
     let order = name.and_then(|n| orders.get(n)).copied().unwrap_or(&[]);
     let mut names: Vec<&String> = properties.keys().collect();
     names.sort_by_key(|k| (order.iter().position(|o| o == k).unwrap_or(usize::MAX), *k));
-    let parent_undocumented = schema.get(UNDOCUMENTED).is_some();
     for key in names {
         let field = &properties[key];
         let (t, def) = target(root, field);
@@ -179,7 +178,6 @@ fn walk<'s>(
                 .map(String::from),
             target: t,
             section,
-            undocumented: parent_undocumented || t.get(UNDOCUMENTED).is_some(),
         });
         if section {
             walk(root, t, def, &path, orders, out);
@@ -194,8 +192,7 @@ fn keys<'s>(root: &'s Value, name: &str) -> Vec<Key<'s>> {
 }
 
 /// The keys of `schema` (a scene's or a study's) whose doc text is missing
-/// or, for a key that holds a value, has no `(unit; default …)` group;
-/// sections marked undocumented are left out.
+/// or, for a key that holds a value, has no `(unit; default …)` group.
 pub fn undocumented_keys(schema: &Value) -> Vec<String> {
     let name = match schema.get("title").and_then(Value::as_str) {
         Some("ribbar study") => "RawStudy",
@@ -203,7 +200,6 @@ pub fn undocumented_keys(schema: &Value) -> Vec<String> {
     };
     keys(schema, name)
         .into_iter()
-        .filter(|k| !k.undocumented)
         .filter(|k| match &k.description {
             None => true,
             Some(d) => !k.section && KeyDoc::parse(d).is_none(),
@@ -255,15 +251,6 @@ fn section_markdown(root: &Value, section: &Key, keys: &[&Key]) -> String {
     let mut out = format!("\n## {}\n\n", section.path);
     if let Some(d) = &section.description {
         out.push_str(&format!("{d}\n\n"));
-    }
-    if section.undocumented {
-        let names: Vec<String> = keys.iter().map(|k| format!("`{}`", k.path)).collect();
-        out.push_str(&format!(
-            "The keys of this section are not generated from the code yet; it accepts \
-             {}. Their meanings are on [Loading and solver keys](loading-solver.md).\n",
-            names.join(", ")
-        ));
-        return out;
     }
     out.push_str("| key | value | default | bounds | meaning |\n|---|---|---|---|---|\n");
     let mut choice_notes = String::new();
@@ -327,7 +314,6 @@ fn keys_page(schema: &Value, name: &str, title: &str, intro: &str) -> String {
             description: None,
             target: schema,
             section: true,
-            undocumented: false,
         };
         out.push_str(&section_markdown(schema, &head, &plain));
     }

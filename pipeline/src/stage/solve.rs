@@ -542,9 +542,11 @@ fn split_outcome(
             step_unit,
         }) => {
             let why = format!(
-            "step {step} did not converge at the minimum step size {step_size:e} {step_unit} (imposed u = {u_imposed:e} m); \
-             residual history {residual_history:?}; likely cause: {cause}"
-        );
+                "step {step} did not converge at the minimum step size {step_size:e} {step_unit} \
+                 (imposed u = {u_imposed:e} m); residual history {residual_history:?}; likely \
+                 cause: {cause}; {}",
+                cause.stall_advice()
+            );
             (*partial, Some(why))
         }
         Err(SolveError::StepLimit {
@@ -552,13 +554,31 @@ fn split_outcome(
             u_imposed,
             partial,
         }) => {
-            let why = format!(
-            "solver.expert.max_steps = {max_steps} converged steps reached at imposed u = {u_imposed:e} m"
-        );
+            let why = step_limit_text(max_steps, u_imposed);
             (*partial, Some(why))
         }
         Err(e) => return Err(e.into()),
     })
+}
+
+/// Why a run stopped at its step limit, and the key that moves it.
+fn step_limit_text(max_steps: usize, u_imposed: f64) -> String {
+    format!(
+        "solver.expert.max_steps = {max_steps} converged steps reached at imposed u = \
+         {u_imposed:e} m; raise solver.expert.max_steps, or remove it, to go further"
+    )
+}
+
+/// How a run ended at the bar's limit load, and what lets the bond carry
+/// more.
+fn limit_load_text(force: f64, yield_force: f64) -> String {
+    format!(
+        "solve: ended at a limit load: the bar yields over its section at F = {force:.1} N \
+         ({:.0} % of σ_y A = {yield_force:.1} N); the bond sees no more load. A stronger bar \
+         (materials.steel.sigma_y, bar.diameter) or a shorter bond \
+         (specimen.adhesive_length) moves the bond's failure below the yield force",
+        100.0 * force / yield_force,
+    )
 }
 
 /// The fields of the last converged step (`fields/end_*`).
@@ -654,13 +674,7 @@ fn report_ending(ctx: &Ctx, ending: &solve::nonlinear::Ending) {
     match *ending {
         solve::nonlinear::Ending::Completed => {}
         solve::nonlinear::Ending::LimitLoad { force, yield_force } => {
-            ctx.printer.line(&format!(
-                "solve: ended at a limit load: the bar yields over its section at F = {:.1} N \
-             ({:.0} % of σ_y A = {:.1} N); the bond sees no more load",
-                force,
-                100.0 * force / yield_force,
-                yield_force
-            ));
+            ctx.printer.line(&limit_load_text(force, yield_force));
         }
         solve::nonlinear::Ending::BrittleFailure {
             force,
@@ -721,6 +735,228 @@ fn report_ending(ctx: &Ctx, ending: &solve::nonlinear::Ending) {
              (the cube split through or the bar pulled free; {broken_concrete_tets} \
              concrete tets with D > 0.99)"
             ));
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use solve::assembly::AssemblyError;
+    use solve::linalg::LinearError;
+    use solve::nonlinear::{NotConverged, Refusal, RegimeChanges, StepFailure};
+
+    /// Every way a step can fail, as a stall at the minimum step reports it.
+    fn every_failure() -> Vec<StepFailure> {
+        let regimes = RegimeChanges::default();
+        let not_converged = [
+            NotConverged::Constitutive {
+                in_line_search: true,
+                source: AssemblyError::Model("x".into()),
+            },
+            NotConverged::Constitutive {
+                in_line_search: false,
+                source: AssemblyError::Model("x".into()),
+            },
+            NotConverged::NonFiniteResidual,
+            NotConverged::NonFiniteCorrection,
+            NotConverged::Stagnating {
+                relative_residual: 1e-3,
+                regimes,
+            },
+            NotConverged::Diverging {
+                residual: 1e9,
+                regimes,
+            },
+            NotConverged::LinearSolve {
+                source: LinearError::NotPositiveDefinite { index: 0 },
+                regimes,
+            },
+            NotConverged::Unsettled {
+                points: 3,
+                passes: 20,
+                relative_residual: 1e-2,
+                regimes,
+            },
+            NotConverged::IterationLimit {
+                iterations: 25,
+                relative_residual: 1e-2,
+                regimes,
+            },
+        ];
+        let refused = [
+            Refusal::LoadJump {
+                increment: 1e-4,
+                limit: 2e-5,
+            },
+            Refusal::ExtrapolationError {
+                indicator: 0.1,
+                limit: 0.02,
+            },
+            Refusal::CurveResolution {
+                deviation: 1e-2,
+                limit: 6e-3,
+                next_step: 1e-6,
+            },
+            Refusal::CreatesEnergy {
+                of_step_work: 0.5,
+                of_total_work: 0.01,
+                limit: 0.15,
+                regimes,
+            },
+            Refusal::OutOfBalance {
+                of_step_work: 0.5,
+                of_total_work: 0.01,
+                limit: 0.15,
+                regimes,
+            },
+            Refusal::FailsEnergyCheck {
+                imbalance: 0.02,
+                dissipation_increment: -0.01,
+                limit: 0.01,
+                regimes,
+            },
+        ];
+        let mut all: Vec<StepFailure> = not_converged.into_iter().map(Into::into).collect();
+        all.extend(refused.into_iter().map(StepFailure::from));
+        all
+    }
+
+    /// The dotted scene keys a message names (`loading.min_step`, …).
+    fn keys_in(text: &str) -> Vec<String> {
+        const SECTIONS: [&str; 6] = [
+            "loading.",
+            "solver.",
+            "materials.",
+            "specimen.",
+            "bar.",
+            "mesh.",
+        ];
+        let word = |c: char| c.is_ascii_alphanumeric() || c == '_' || c == '.';
+        text.split(|c: char| !word(c))
+            .filter(|w| SECTIONS.iter().any(|s| w.starts_with(s)))
+            // File names (`solver.md`) are not keys.
+            .filter(|w| ![".md", ".json", ".yaml"].iter().any(|e| w.ends_with(e)))
+            .map(|w| w.trim_end_matches('.').to_string())
+            .collect()
+    }
+
+    /// Whether the scene's schema has the dotted `key`.
+    fn scene_has(schema: &serde_json::Value, key: &str) -> bool {
+        use serde_json::Value;
+        // What a schema stands for: references followed, an optional
+        // value's null branch left out.
+        const NULL: Value = Value::Null;
+        fn resolve<'s>(schema: &'s Value, mut node: &'s Value) -> &'s Value {
+            loop {
+                if let Some(r) = node.get("$ref").and_then(Value::as_str) {
+                    node = schema.pointer(r.trim_start_matches('#')).unwrap_or(&NULL);
+                } else if let Some(branches) = node.get("anyOf").and_then(Value::as_array) {
+                    let real = branches
+                        .iter()
+                        .find(|b| b.get("type").and_then(Value::as_str) != Some("null"));
+                    node = real.unwrap_or(&NULL);
+                } else {
+                    return node;
+                }
+            }
+        }
+        let mut node = schema;
+        for part in key.split('.') {
+            match resolve(schema, node)
+                .get("properties")
+                .and_then(|p| p.get(part))
+            {
+                Some(next) => node = next,
+                None => return false,
+            }
+        }
+        true
+    }
+
+    /// Every message of a run that stops early or ends short of its
+    /// loading names at least one scene key a user would change, and every
+    /// key it names exists in the scene's schema (so a renamed key fails
+    /// here, not in a user's hands).
+    #[test]
+    fn stop_messages_name_keys_that_exist() {
+        let schema = crate::scene::RawScene::schema();
+        let mut messages: Vec<(String, String)> = every_failure()
+            .iter()
+            .map(|f| (format!("stall: {f}"), f.stall_advice()))
+            .collect();
+        messages.push(("step limit".into(), step_limit_text(3, 1e-5)));
+        messages.push(("limit load".into(), limit_load_text(9e3, 1e4)));
+        for (what, text) in &messages {
+            let keys = keys_in(text);
+            assert!(!keys.is_empty(), "{what}: names no key: {text}");
+            for key in keys {
+                assert!(
+                    scene_has(&schema, &key),
+                    "{what}: {key} is not a scene key: {text}"
+                );
+            }
+        }
+        let checkpoint = SolveError::Checkpoint("3 nodes, not 4".into()).to_string();
+        assert!(checkpoint.contains("`ribbar clean`"), "{checkpoint}");
+        // The check itself can fail: a key of an earlier layout is not found.
+        assert!(!scene_has(&schema, "solver.max_iterations"));
+        assert!(scene_has(&schema, "solver.expert.max_iterations"));
+    }
+
+    /// The user pages on stopping runs and on the solver name only scene
+    /// keys that exist.
+    #[test]
+    fn the_solver_pages_name_keys_that_exist() {
+        let schema = crate::scene::RawScene::schema();
+        let docs = Path::new(env!("CARGO_MANIFEST_DIR")).join("../docs/src");
+        for page in ["howto/when-a-run-stops.md", "explanation/solver.md"] {
+            let text = std::fs::read_to_string(docs.join(page)).expect(page);
+            let keys = keys_in(&text);
+            assert!(keys.len() > 10, "{page}: {keys:?}");
+            for key in keys {
+                assert!(scene_has(&schema, &key), "{page}: {key} is not a scene key");
+            }
+        }
+    }
+
+    /// Each cause of a stall names its own keys: the iteration limit
+    /// `solver.expert.max_iterations`, the stagnating residual the
+    /// acceptance and the holds, the linear solve its solver and
+    /// preconditioner, unsettled points the holds, the IMPL-EX refusal its
+    /// tolerance and rejection, the curve's bend its tolerance; each after
+    /// `loading.min_step`.
+    #[test]
+    fn each_stall_names_the_keys_of_its_cause() {
+        let advice = |i: usize| every_failure()[i].stall_advice();
+        let expect = [
+            (8, vec!["solver.expert.max_iterations"]),
+            (
+                4,
+                vec![
+                    "solver.expert.stagnation_acceptance",
+                    "solver.expert.interface_holds",
+                ],
+            ),
+            (
+                6,
+                vec![
+                    "solver.expert.linear_solver",
+                    "solver.expert.preconditioner",
+                ],
+            ),
+            (7, vec!["solver.expert.interface_holds"]),
+            (
+                10,
+                vec!["solver.impl_ex_tolerance", "solver.expert.impl_ex_reject"],
+            ),
+            (11, vec!["loading.curve_tolerance"]),
+        ];
+        for (i, keys) in expect {
+            let text = advice(i);
+            let mut want = vec!["loading.min_step".to_string()];
+            want.extend(keys.iter().map(|k| k.to_string()));
+            assert_eq!(keys_in(&text), want, "{text}");
         }
     }
 }

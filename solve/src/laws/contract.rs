@@ -4,7 +4,17 @@
 use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
 
 /// Which tangent the caller wants (MFront's elastic / secant / consistent).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Hash,
+    serde::Serialize,
+    serde::Deserialize,
+    schemars::JsonSchema,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum TangentKind {
     /// Undamaged elastic stiffness.

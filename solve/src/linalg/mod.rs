@@ -24,7 +24,9 @@ use faer::{Conj, MatMut, Par, Side};
 use serde::{Deserialize, Serialize};
 
 /// Fill-reducing ordering of the Cholesky factor.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default, schemars::JsonSchema,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum Ordering {
     /// METIS nested dissection on the node graph (METIS_NodeND).

@@ -265,6 +265,82 @@ impl StepFailure {
     }
 }
 
+/// The user guide's page on the messages of a run that stops.
+pub const WHEN_A_RUN_STOPS: &str = "docs/src/howto/when-a-run-stops.md";
+
+impl NotConverged {
+    /// The scene keys whose change most likely takes a step past this
+    /// failure, the first the likeliest.
+    pub fn keys_to_change(&self) -> &'static [&'static str] {
+        match self {
+            NotConverged::Constitutive {
+                in_line_search: true,
+                ..
+            } => &["solver.expert.line_search"],
+            // An iterate no law can evaluate, or a non-finite one: a
+            // shorter step is the only remedy.
+            NotConverged::Constitutive { .. }
+            | NotConverged::NonFiniteResidual
+            | NotConverged::NonFiniteCorrection => &["loading.min_step"],
+            NotConverged::Stagnating { .. } => &[
+                "solver.expert.stagnation_acceptance",
+                "solver.expert.interface_holds",
+            ],
+            NotConverged::Diverging { .. } => {
+                &["solver.expert.tangent", "solver.expert.line_search"]
+            }
+            NotConverged::LinearSolve { .. } => &[
+                "solver.expert.linear_solver",
+                "solver.expert.preconditioner",
+            ],
+            NotConverged::Unsettled { .. } => &["solver.expert.interface_holds"],
+            NotConverged::IterationLimit { .. } => &["solver.expert.max_iterations"],
+        }
+    }
+}
+
+impl Refusal {
+    /// The scene keys that set the check which refused the step.
+    pub fn keys_to_change(&self) -> &'static [&'static str] {
+        match self {
+            Refusal::LoadJump { .. } => &["loading.max_step"],
+            Refusal::ExtrapolationError { .. } => {
+                &["solver.impl_ex_tolerance", "solver.expert.impl_ex_reject"]
+            }
+            Refusal::CurveResolution { .. } => &["loading.curve_tolerance"],
+            Refusal::CreatesEnergy { .. }
+            | Refusal::OutOfBalance { .. }
+            | Refusal::FailsEnergyCheck { .. } => &["solver.expert.dissipation_tolerance"],
+        }
+    }
+}
+
+impl StepFailure {
+    /// [`NotConverged::keys_to_change`] or [`Refusal::keys_to_change`].
+    pub fn keys_to_change(&self) -> &'static [&'static str] {
+        match self {
+            StepFailure::NotConverged(n) => n.keys_to_change(),
+            StepFailure::Refused(r) => r.keys_to_change(),
+        }
+    }
+
+    /// What a user may change after a stall with this failure at the
+    /// minimum step: a smaller `loading.min_step`, then the keys of the
+    /// cause, and where the user guide explains them.
+    pub fn stall_advice(&self) -> String {
+        let mut keys = vec!["loading.min_step"];
+        keys.extend(
+            self.keys_to_change()
+                .iter()
+                .filter(|k| **k != "loading.min_step"),
+        );
+        format!(
+            "to get past it, change {} ({WHEN_A_RUN_STOPS})",
+            keys.join(", then ")
+        )
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

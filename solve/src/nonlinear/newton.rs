@@ -371,7 +371,7 @@ impl Workspace<'_> {
     /// nearly in equilibrium; checked before the secant switch), else the
     /// consistent tangent gives way to the secant matrix (which does not
     /// jump between iterates), else the attempt fails (a cut-back is
-    /// cheaper than more iterations). docs/solver.md, Stagnation.
+    /// cheaper than more iterations). docs/src/validation/solver.md, Stagnation.
     fn stagnation(
         &mut self,
         k: usize,
@@ -430,7 +430,7 @@ impl Workspace<'_> {
     /// iterate strains the single layer of elements next to the loaded end
     /// by the whole increment (5 µm over a 1 mm tet yields a 365 MPa bar)
     /// and Newton then starts from plastic states the converged step never
-    /// reaches (docs/solver.md, "First step"). Leaves `u` unchanged and
+    /// reaches (docs/src/validation/solver.md, "First step"). Leaves `u` unchanged and
     /// returns false where the linear solve fails.
     pub(crate) fn tangent_predictor(
         &mut self,
@@ -518,7 +518,7 @@ impl Workspace<'_> {
     /// the correction's Δλ under indirect control). The
     /// unsymmetric tangent has no potential, so a shorter step is kept only
     /// if its residual is smaller than the full step's; and a step shorter
-    /// than [`LINE_SEARCH_MIN_STEP`] is never kept (docs/solver.md, "The
+    /// than [`LINE_SEARCH_MIN_STEP`] is never kept (docs/src/validation/solver.md, "The
     /// softening-branch stall"). Returns the step length kept; `u`, the
     /// workspace's iterate and `r` are left at it.
     fn line_search(

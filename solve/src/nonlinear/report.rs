@@ -99,12 +99,15 @@ pub enum SolveError {
     Assembly(#[from] AssemblyError),
     #[error("linear solver set-up: {0}")]
     Linear(#[from] LinearError),
-    #[error("checkpoint does not match the model: {0}")]
+    #[error(
+        "checkpoint does not match the model: {0}; `ribbar clean` the scene to remove its \
+         results and start over"
+    )]
     Checkpoint(String),
     #[error(
         "step {step} did not converge at the minimum step size: imposed displacement {u_imposed:e} m \
          (step {step_size:e} {step_unit}); residual history {residual_history:?}; likely cause: {cause}; \
-         {} converged steps kept", partial.rows.len()
+         {}; {} converged steps kept", cause.stall_advice(), partial.rows.len()
     )]
     Stalled {
         step: usize,
@@ -118,7 +121,8 @@ pub enum SolveError {
     },
     #[error(
         "solver.expert.max_steps = {max_steps} converged steps reached at imposed displacement \
-         {u_imposed:e} m before the end of the loading"
+         {u_imposed:e} m before the end of the loading; raise solver.expert.max_steps, or remove \
+         it, to go further"
     )]
     StepLimit {
         max_steps: usize,

@@ -75,7 +75,7 @@ impl Retried {
 /// implicit law on the stated criteria. Without the passes the
 /// extrapolated damage of a tet passing its threshold lagged the implicit
 /// one by so much that committed states were out of balance by up to 95 %
-/// of the reaction (docs/solver.md, "Law switches: the explicit retry").
+/// of the reaction (docs/src/validation/solver.md, "Law switches: the explicit retry").
 /// The interface points held for the step (or that chattered in an
 /// attempt ending on its best iterate) are settled by the same passes: each
 /// pass holds them at the history their law reached at the converged jump,

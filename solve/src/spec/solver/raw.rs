@@ -20,11 +20,12 @@ use super::settings::{
 use crate::laws::TangentKind;
 use crate::linalg::Ordering;
 use geom::units::{Dim, RawQuantity};
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 /// `loading` as written: how far the bar is pulled and the bounds of the
 /// steps.
-#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct RawLoading {
     /// Final imposed displacement of the bar's loaded end (length; default
@@ -53,7 +54,7 @@ pub struct RawLoading {
 
 /// A named set of solver settings for a kind of run (`solver.profile`).
 /// The keys a scene writes override the profile's.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Profile {
     /// Implicit integration of every law, Newton on the energy and force
@@ -95,23 +96,24 @@ impl Profile {
 }
 
 /// `solver` as written: the main keys, the profile, and the expert section.
-#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct RawSolver {
-    /// Named settings for a kind of run: `implicit` (default), `impl_ex`
-    /// (IMPL-EX concrete, for the paper's mesh) or `impl_ex_interface`
-    /// (IMPL-EX concrete and interface, for interfaces that unzip at once).
+    /// Named settings for a kind of run: `implicit`, `impl_ex` (IMPL-EX
+    /// concrete, for the paper's mesh) or `impl_ex_interface` (IMPL-EX
+    /// concrete and interface, for interfaces that unzip at once); the keys
+    /// a scene writes override the profile's (choice; default implicit).
     pub profile: Option<Profile>,
     /// Newton's force criterion: ‖residual‖ ≤ this × ‖reactions‖ (pure
     /// number; default 1e-4; in (0, 1)).
     pub residual_tolerance: Option<f64>,
     /// Time integration of the Mazars damage: `implicit` (backward Euler)
     /// or `impl_ex` (the stress of a step uses the damage extrapolated from
-    /// the last two steps; first order in the step). Default from the
-    /// profile.
+    /// the last two steps; first order in the step) (choice; default
+    /// implicit, impl_ex under the IMPL-EX profiles).
     pub concrete_integration: Option<ConcreteIntegration>,
-    /// Time integration of the interface damage: `implicit` or `impl_ex`.
-    /// Default from the profile.
+    /// Time integration of the interface damage: `implicit` or `impl_ex`
+    /// (choice; default implicit, impl_ex under `impl_ex_interface`).
     pub interface_integration: Option<InterfaceIntegration>,
     /// IMPL-EX step control: a step whose displacement is out of balance
     /// under the implicit damage by more than this share of the reaction
@@ -119,7 +121,8 @@ pub struct RawSolver {
     pub impl_ex_tolerance: Option<f64>,
     /// What a step prescribes: `auto` (the imposed displacement, handing
     /// over to dissipation control where it stalls after a dissipating
-    /// step), `off`, `fed`, `energy` or `process_zone`. Default `auto`.
+    /// step), `off`, `fed`, `energy` or `process_zone` (choice; default
+    /// auto).
     pub path_following: Option<PathFollowing>,
     /// Settings a user rarely needs: step growth and cut-back, Newton's
     /// other criteria, the linear solver, and the stepping policy's
@@ -129,7 +132,7 @@ pub struct RawSolver {
 
 /// `solver.expert` as written: each key's unit and why a user would set
 /// it are in specs/README.md.
-#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct RawExpert {
     /// Step growth factor after an easy step (pure number; default 1.5;
@@ -144,8 +147,8 @@ pub struct RawExpert {
     pub max_steps: Option<usize>,
     /// What `loading.curve_tolerance` bounds: `distance` (the shortest
     /// distance of a point from its neighbours' chord) or `stress` (where
-    /// the FED grows, the σ_mb distance at the point's FED). Default
-    /// `distance`.
+    /// the FED grows, the σ_mb distance at the point's FED) (choice;
+    /// default distance).
     pub curve_error: Option<CurveError>,
     /// Newton's energy criterion: |Δu·r| ≤ this × the step's largest
     /// (pure number; default 1e-8, 0.5 under the IMPL-EX profiles; in (0, 1)).
@@ -153,23 +156,24 @@ pub struct RawExpert {
     /// Newton iterations per attempt before a cut-back (count; default 25;
     /// ≥ 1).
     pub max_iterations: Option<usize>,
-    /// Newton matrix: `consistent` (default), `secant` or `elastic`.
+    /// Newton matrix: `consistent`, `secant` or `elastic` (choice; default
+    /// consistent).
     pub tangent: Option<TangentKind>,
     /// Secant line search on the energy along each correction (bool;
     /// default true).
     pub line_search: Option<bool>,
-    /// First iterate of a step: `extrapolate` (default: the last increment
-    /// scaled to the new step) or `constant`.
+    /// First iterate of a step: `extrapolate` (the last increment scaled
+    /// to the new step) or `constant` (choice; default extrapolate).
     pub predictor: Option<Predictor>,
     /// A stagnating attempt ends on its best iterate if its relative
     /// residual is at most this multiple of `residual_tolerance` (pure
     /// number; default 1; ≥ 1).
     pub stagnation_acceptance: Option<f64>,
-    /// Linear solver of the corrections: `gmres` (default), `cholesky` or
-    /// `pcg`.
+    /// Linear solver of the corrections: `gmres`, `cholesky` or `pcg`
+    /// (choice; default gmres).
     pub linear_solver: Option<LinearSolverKind>,
-    /// Fill-reducing ordering of Cholesky factors: `metis` (default) or
-    /// `amd`.
+    /// Fill-reducing ordering of Cholesky factors: `metis` or `amd`
+    /// (choice; default metis).
     pub ordering: Option<Ordering>,
     /// GMRES relative residual of a correction, the tightest one used
     /// (pure number; default 1e-3; in (0, 1)).
@@ -177,17 +181,18 @@ pub struct RawExpert {
     /// GMRES iterations per solve; past half of them the preconditioner is
     /// rebuilt (count; default 40, 120 under `impl_ex_interface`; ≥ 1).
     pub krylov_max_iterations: Option<usize>,
-    /// GMRES tolerance per correction: `eisenstat_walker` (default),
-    /// `tolerance` or `fixed`.
+    /// GMRES tolerance per correction: `eisenstat_walker`, `tolerance` or
+    /// `fixed` (choice; default eisenstat_walker, tolerance under the
+    /// IMPL-EX profiles).
     pub forcing: Option<Forcing>,
-    /// What preconditions GMRES: `auto` (default: multigrid from 100 000
-    /// free DOFs), `cholesky` or `multigrid`.
+    /// What preconditions GMRES: `auto` (multigrid from 100 000 free DOFs,
+    /// else Cholesky), `cholesky` or `multigrid` (choice; default auto).
     pub preconditioner: Option<PreconditionerKind>,
     /// Precision of the Cholesky preconditioner's triangular solves:
-    /// `single` (default) or `double`.
+    /// `single` or `double` (choice; default single).
     pub preconditioner_precision: Option<Precision>,
-    /// When a kept multigrid hierarchy is rebuilt: `half_limit` (default)
-    /// or `amortised`.
+    /// When a kept multigrid hierarchy is rebuilt: `half_limit` or
+    /// `amortised` (choice; default half_limit).
     pub multigrid_rebuild: Option<MultigridRebuild>,
     /// A converged IMPL-EX step whose error is above this multiple of
     /// `impl_ex_tolerance` is redone shorter (pure number; default 2 with
@@ -198,7 +203,7 @@ pub struct RawExpert {
     /// [0, 1)).
     pub sliver_quality: Option<f64>,
     /// When interface points whose regime keeps switching are held for a
-    /// retry: `on_stall` (default), `always` or `off`.
+    /// retry: `on_stall`, `always` or `off` (choice; default on_stall).
     pub interface_holds: Option<InterfaceHolds>,
     /// A converged step that gives back dissipated energy, or leaves forces
     /// out of balance whose work is, more than this share of its own work is

@@ -4,6 +4,7 @@
 use crate::laws::TangentKind;
 use crate::linalg::Ordering;
 use geom::units::UnitError;
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 /// A `loading` or `solver` value that cannot be used.
@@ -65,9 +66,9 @@ pub struct Loading {
     pub curve_error: CurveError,
 }
 
-/// What `loading.curve_tolerance` bounds (docs/solver.md, "Resolving the
+/// What `loading.curve_tolerance` bounds (docs/src/validation/solver.md, "Resolving the
 /// curve").
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum CurveError {
     /// The shortest distance of a curve point from its neighbours' chord.
@@ -76,7 +77,7 @@ pub enum CurveError {
     /// Where the FED grows, the σ_mb distance of the point from the chord
     /// at its FED: the error of σ_mb read along FED, which on a steep rise
     /// or drop is many times the shortest distance. Elsewhere as
-    /// `Distance`.
+    /// `distance`.
     Stress,
 }
 
@@ -86,7 +87,7 @@ impl CurveError {
     }
 }
 
-/// `loading.curve_tolerance` unless a scene sets it (docs/solver.md,
+/// `loading.curve_tolerance` unless a scene sets it (docs/src/validation/solver.md,
 /// "Resolving the curve").
 pub const DEFAULT_CURVE_TOLERANCE: f64 = 3e-3;
 
@@ -109,7 +110,7 @@ impl Default for Loading {
 }
 
 /// Linear solver of the Newton corrections.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum LinearSolverKind {
     /// Sparse Cholesky of every new matrix (of the symmetric part of an
@@ -126,10 +127,11 @@ pub enum LinearSolverKind {
 }
 
 /// What preconditions GMRES in the Newton–Krylov solver.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum PreconditionerKind {
-    /// `multigrid` from [`MULTIGRID_MIN_DOFS`] free DOFs on, else `cholesky`.
+    /// `multigrid` from 100 000 free DOFs on (`MULTIGRID_MIN_DOFS`), else
+    /// `cholesky`.
     #[default]
     Auto,
     /// A kept sparse Cholesky factor of the symmetric part (or the secant
@@ -143,7 +145,7 @@ pub enum PreconditionerKind {
 
 /// When the kept multigrid hierarchy is built anew between GMRES solves
 /// (besides when there is none and when GMRES fails with it).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum MultigridRebuild {
     /// After a solve that needed more than half of `krylov_max_iterations`.
@@ -151,7 +153,7 @@ pub enum MultigridRebuild {
     HalfLimit,
     /// Also once the solves since the last build have needed, beyond the
     /// iterations of the first of them, more GMRES iterations in all than
-    /// a build costs ([`REBUILD_COST_ITERATIONS`]), so that a hierarchy
+    /// a build costs (40, `REBUILD_COST_ITERATIONS`), so that a hierarchy
     /// built before the damage grew is renewed even when no single solve
     /// passes the half limit. A rebuild whose first solve needs no fewer
     /// iterations per decade of residual than the worn hierarchy's solves
@@ -166,7 +168,7 @@ pub const REBUILD_COST_ITERATIONS: usize = 40;
 
 /// How the GMRES tolerance of each Newton correction (the forcing term η)
 /// is chosen.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Forcing {
     /// η = `krylov_tolerance` for every correction.
@@ -188,7 +190,7 @@ pub enum Forcing {
 
 /// Floating-point precision of the kept Cholesky factor when it is applied
 /// as the GMRES preconditioner (the factorisation itself is always double).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Precision {
     /// L and the triangular solves in f64.
@@ -201,7 +203,7 @@ pub enum Precision {
 }
 
 /// Time integration of the Mazars concrete damage.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum ConcreteIntegration {
     /// Backward Euler: the stress of a step uses the damage of the step's
@@ -214,12 +216,12 @@ pub enum ConcreteIntegration {
     /// converged steps (never below the last one), so the concrete is linear
     /// within a step; the damage history is still integrated implicitly.
     /// First-order in the step size: its curve error is measured against
-    /// the implicit one (docs/solver.md).
+    /// the implicit one (docs/src/validation/solver.md).
     ImplEx,
 }
 
 /// Time integration of the interface damage (FCZM and Tvergaard λ̃).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum InterfaceIntegration {
     /// Backward Euler: the traction of a step uses the damage of the
@@ -231,12 +233,12 @@ pub enum InterfaceIntegration {
     /// (never below the last one), so the interface's damage does not
     /// switch between Newton iterates and its tangent does not soften;
     /// friction and contact stay implicit. The step control of
-    /// `impl_ex_tolerance` bounds its error (docs/solver.md).
+    /// `impl_ex_tolerance` bounds its error (docs/src/validation/solver.md).
     ImplEx,
 }
 
-/// What a load step prescribes (docs/solver.md, Path-following).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default)]
+/// What a load step prescribes (docs/src/validation/solver.md, Path-following).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum PathFollowing {
     /// Every step prescribes the imposed displacement λ.
@@ -277,7 +279,7 @@ pub enum PathFollowing {
 }
 
 /// When the solver holds the interface points whose regime keeps
-/// switching between Newton iterates (docs/solver.md, "Law switches").
+/// switching between Newton iterates (docs/src/validation/solver.md, "Law switches").
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default)]
 #[serde(rename_all = "snake_case", try_from = "RawInterfaceHolds")]
 pub enum InterfaceHolds {
@@ -322,8 +324,29 @@ impl TryFrom<RawInterfaceHolds> for InterfaceHolds {
     }
 }
 
+/// The schema of what the parser reads (`RawInterfaceHolds`): a mode's
+/// name, or the first version's bool. Written out because the derive would
+/// take the schema of the untagged `RawInterfaceHolds`, whose mode is any
+/// string.
+impl JsonSchema for InterfaceHolds {
+    fn schema_name() -> std::borrow::Cow<'static, str> {
+        "InterfaceHolds".into()
+    }
+
+    fn json_schema(_: &mut schemars::SchemaGenerator) -> schemars::Schema {
+        schemars::json_schema!({
+            "oneOf": [
+                {"const": "off", "description": "Never: a step whose interface chatters is cut back, and stalls at the minimum step."},
+                {"const": "on_stall", "description": "From the first step that would otherwise stall at its minimum size to the end of the run; a run that gets through without them keeps its curve."},
+                {"const": "always", "description": "In the retries of every step."},
+                {"type": "boolean", "description": "The first form of the option: true is always, false is off."}
+            ]
+        })
+    }
+}
+
 /// First iterate of a load step.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Predictor {
     /// The last converged displacement with the new Dirichlet values.
@@ -406,7 +429,7 @@ pub struct SolverSettings {
     /// this take their damage from an extrapolation of their history
     /// (IMPL-EX) instead of the step's own: a degenerate tet's strain
     /// swings with displacements far below the tolerance, and its damage
-    /// then switches on and off between Newton iterates (docs/solver.md,
+    /// then switches on and off between Newton iterates (docs/src/validation/solver.md,
     /// "Law switches"). 0 disables; left out of the serialised form then.
     #[serde(default, skip_serializing_if = "is_zero")]
     pub sliver_quality: f64,
@@ -429,7 +452,7 @@ pub struct SolverSettings {
     /// − stored, over the whole specimen), or leaves forces out of balance
     /// whose work is, more than this fraction of its own external work
     /// plus 2e-3 of W_ext, reached a state the laws cannot reach from the
-    /// last one: it is refused like a failed attempt (docs/solver.md,
+    /// last one: it is refused like a failed attempt (docs/src/validation/solver.md,
     /// "Steps that create energy"). 0 disables.
     /// Always serialised, so that a change of it (or of its default)
     /// re-runs the solve.
@@ -440,7 +463,7 @@ pub struct SolverSettings {
 /// Default of `solver.expert.dissipation_tolerance`: above what the FCZM's
 /// non-potential exchange gives back in the kept steps of the sweeps and
 /// holdouts (at most 0.082 of a step's work), below the force jumps it
-/// refuses (0.21 to 3.9 of their step's work; docs/solver.md).
+/// refuses (0.21 to 3.9 of their step's work; docs/src/validation/solver.md).
 pub const DEFAULT_DISSIPATION_TOLERANCE: f64 = 0.15;
 
 fn default_dissipation_tolerance() -> f64 {
@@ -460,7 +483,7 @@ fn is_half_limit(r: &MultigridRebuild) -> bool {
 }
 
 /// Free DOFs from which `preconditioner: auto` takes the multigrid. Measured
-/// (docs/performance.md, "The multigrid as the Newton–Krylov
+/// (docs/src/validation/performance.md, "The multigrid as the Newton–Krylov
 /// preconditioner"): on R1 at the paper's mesh (412 k DOFs) the multigrid
 /// solve took 641 s and 2.06 GiB against 743 s and 7.6 GiB for the Cholesky
 /// route (that one on the earlier metre-built mesh), the same curve; on r1-coarse (54 k) both
@@ -501,10 +524,10 @@ fn is_implicit_interface(c: &InterfaceIntegration) -> bool {
 }
 
 /// Default of `solver.expert.impl_ex_reject` under `interface_integration:
-/// impl_ex` (docs/solver.md, "IMPL-EX interface").
+/// impl_ex` (docs/src/validation/solver.md, "IMPL-EX interface").
 pub const DEFAULT_IMPL_EX_REJECT: f64 = 2.0;
 
-/// Default of `solver.impl_ex_tolerance` (docs/solver.md, IMPL-EX).
+/// Default of `solver.impl_ex_tolerance` (docs/src/validation/solver.md, IMPL-EX).
 pub const DEFAULT_IMPL_EX_TOLERANCE: f64 = 1e-2;
 
 fn default_impl_ex_tolerance() -> f64 {
