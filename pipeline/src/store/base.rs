@@ -110,12 +110,24 @@ pub fn flatten(value: &Value) -> BTreeMap<String, String> {
 }
 
 /// Dotted keys whose values differ between two input documents.
+/// A section absent on one side (a null leaf) and written on the other is
+/// named by its keys, not by the section itself; an absent section and an
+/// empty one are the same.
 pub fn changed_keys(old: &Value, new: &Value) -> Vec<String> {
     let (a, b) = (flatten(old), flatten(new));
+    let written = |v: Option<&String>| v.filter(|v| *v != "null" && *v != "{}").cloned();
+    let section_of_the_other = |k: &str, other: &BTreeMap<String, String>| {
+        let prefix = format!("{k}.");
+        other
+            .range(prefix.clone()..)
+            .next()
+            .is_some_and(|(o, _)| o.starts_with(&prefix))
+    };
     let mut keys: Vec<String> = a
         .keys()
         .chain(b.keys())
-        .filter(|k| a.get(*k) != b.get(*k))
+        .filter(|k| written(a.get(*k)) != written(b.get(*k)))
+        .filter(|k| !section_of_the_other(k, &a) && !section_of_the_other(k, &b))
         .cloned()
         .collect();
     keys.dedup();
