@@ -177,6 +177,31 @@ fn exhausted(method: Method, drawn: usize, out: &Points) -> String {
     )
 }
 
+/// The points of a Saltelli row or a Morris trajectory, which is kept whole
+/// or not at all: all its candidates when each is in the design bounds,
+/// else the first that is not (its role's label, its values, why).
+type WholeOrRejected = Result<Vec<DesignPoint>, (String, Vec<AxisValue>, String)>;
+
+fn accept_whole(
+    axes: &[Axis],
+    candidates: Vec<(Role, Vec<f64>)>,
+    check: &Check,
+) -> Result<WholeOrRejected, String> {
+    let mut accepted = Vec::with_capacity(candidates.len());
+    for (role, unit) in candidates {
+        let v = values(axes, &unit);
+        match check(&v)? {
+            Verdict::Valid => accepted.push(DesignPoint {
+                role,
+                unit,
+                values: v,
+            }),
+            Verdict::OutOfBounds(reason) => return Ok(Err((role.label(axes), v, reason))),
+        }
+    }
+    Ok(Ok(accepted))
+}
+
 /// Saltelli's design for `n` base rows: from 2d-dimensional Sobol' points
 /// (seeded), A the first d coordinates, B the last d, and for every
 /// parameter i the point A with its i-th coordinate from B; N (d + 2)
@@ -201,28 +226,13 @@ pub fn saltelli(axes: &[Axis], n: usize, seed: u64, check: &Check) -> Result<Poi
             ab[i] = b[i];
             candidates.push((Role::SobolAB { row, parameter: i }, ab));
         }
-        let mut accepted = Vec::with_capacity(candidates.len());
-        let mut rejected = None;
-        for (role, unit) in candidates {
-            let v = values(axes, &unit);
-            match check(&v)? {
-                Verdict::Valid => accepted.push(DesignPoint {
-                    role,
-                    unit,
-                    values: v,
-                }),
-                Verdict::OutOfBounds(reason) => {
-                    rejected = Some((role.label(axes), v, reason));
-                    break;
-                }
-            }
-        }
+        let rejected = accept_whole(axes, candidates, check)?;
         match rejected {
-            None => {
+            Ok(accepted) => {
                 out.points.extend(accepted);
                 row += 1;
             }
-            Some((which, v, reason)) => {
+            Err((which, v, reason)) => {
                 out.reject(format!("Sobol' point {draw} (as {which})"), v, reason, n)?
             }
         }
@@ -276,25 +286,10 @@ pub fn morris(
                 x.clone(),
             ));
         }
-        let mut accepted = Vec::with_capacity(d + 1);
-        let mut rejected = None;
-        for (role, unit) in candidates {
-            let v = values(axes, &unit);
-            match check(&v)? {
-                Verdict::Valid => accepted.push(DesignPoint {
-                    role,
-                    unit,
-                    values: v,
-                }),
-                Verdict::OutOfBounds(reason) => {
-                    rejected = Some((role.label(axes), v, reason));
-                    break;
-                }
-            }
-        }
+        let rejected = accept_whole(axes, candidates, check)?;
         match rejected {
-            None => out.points.extend(accepted),
-            Some((which, v, reason)) => out.reject(
+            Ok(accepted) => out.points.extend(accepted),
+            Err((which, v, reason)) => out.reject(
                 format!("trajectory draw {drawn} (at its {which})"),
                 v,
                 reason,
