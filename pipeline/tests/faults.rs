@@ -949,7 +949,7 @@ fn every_study_case_has_a_row_saying_how_it_ended() {
             &path,
             format!(
                 "name: {name}\nbase: {}\ncombine: zip\nset:\n  loading.u_final: 0.02 mm\nparameters:\n  \
-                 specimen.cube_side: {sides}\n  specimen.adhesive_length: {lengths}\n  loading.max_steps: {steps}\n",
+                 specimen.cube_side: {sides}\n  specimen.adhesive_length: {lengths}\n  solver.expert.max_steps: {steps}\n",
                 base.display()
             ),
         )
