@@ -350,7 +350,13 @@ fn a_stopped_case_is_kept_and_tabulated_as_ribbar_study_does() {
         t.into_iter()
             .map(|row| {
                 row.into_iter()
-                    .map(|c| if c.ends_with(".log") { String::new() } else { c })
+                    .map(|c| {
+                        if c.ends_with(".log") {
+                            String::new()
+                        } else {
+                            c
+                        }
+                    })
                     .collect()
             })
             .collect()
