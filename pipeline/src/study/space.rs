@@ -105,10 +105,15 @@ impl Axis {
         let u = u.clamp(0.0, 1.0);
         match &self.span {
             Span::Range { lo, hi, scale, dim } => {
+                // Exact at both ends and never outside [lo, hi]: a design
+                // at the edge of its range is the bound as written, not
+                // one rounding beyond it.
                 let x = match scale {
-                    Scale::Linear => lo + u * (hi - lo),
+                    Scale::Linear => (1.0 - u) * lo + u * hi,
+                    Scale::Log if u == 1.0 => *hi,
                     Scale::Log => lo * (hi / lo).powf(u),
-                };
+                }
+                .clamp(*lo, *hi);
                 AxisValue {
                     table: Value::from(x),
                     arg: match dim {
@@ -316,6 +321,30 @@ mod tests {
         assert_eq!(h.show(&h.value(0.5)), "0.55 mm");
         assert_eq!(beta.show(&beta.value(1.0)), "90 deg");
         assert_eq!(side.show(&side.value(0.0)), "rotated");
+    }
+
+    /// The ends of the unit interval are the bounds themselves, and no
+    /// value falls outside them by a rounding.
+    #[test]
+    fn ranges_keep_their_values_within_the_bounds() {
+        for yaml in [
+            "{range: [0.35 mm, 0.65 mm]}",
+            "{range: [45 deg, 90 deg]}",
+            "{range: [0.3 mm, 0.7 mm], scale: log}",
+            "{range: [0.1, 0.3]}",
+        ] {
+            let a = axis(yaml).unwrap();
+            let (lo, hi) = match &a.span {
+                Span::Range { lo, hi, .. } => (*lo, *hi),
+                Span::Choices(_) => panic!("{yaml} is a range"),
+            };
+            assert_eq!(a.value(0.0).table.as_f64(), Some(lo), "{yaml}");
+            assert_eq!(a.value(1.0).table.as_f64(), Some(hi), "{yaml}");
+            for i in 0..=1000 {
+                let x = a.value(f64::from(i) / 1000.0).table.as_f64().unwrap();
+                assert!((lo..=hi).contains(&x), "{yaml}: {x} outside [{lo}, {hi}]");
+            }
+        }
     }
 
     /// Bad axes are refused naming the key and the problem.
