@@ -1,6 +1,6 @@
 //! The shipped scene specs build in real gmsh with agreeing metrics.
 
-mod common;
+use crate::common;
 
 use geom::gmsh::Gmsh;
 

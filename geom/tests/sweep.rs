@@ -5,8 +5,6 @@
 //! 30 designs over the standards' whole ranges, corners included, built and
 //! meshed).
 
-mod common;
-
 use geom::build::offline_metrics;
 use geom::spec::{resolve, Bar, RawBar, RawSpecimen, Specimen};
 

@@ -1,7 +1,7 @@
 //! The quarter model of a smooth bar's specimen (issue 7: symmetry) builds
 //! in real gmsh and reports whole-specimen metrics.
 
-mod common;
+use crate::common;
 
 use geom::spec::{resolve, RawBar, RawSpecimen, Symmetry};
 use std::f64::consts::PI;

@@ -1,7 +1,7 @@
 //! Bad input to the mesh stage: each a typed error naming what and where,
 //! never a panic, earlier artifacts intact (SPEC §8).
 
-mod common;
+use crate::common;
 use common::*;
 use mesh::{build_model, mesh_specimen, read_msh, MeshError, MeshSpec, Model};
 use std::path::Path;

@@ -2,7 +2,7 @@
 //! coarsens toward the axis while a band under its surface, and so the
 //! interface, keeps h_interface.
 
-mod common;
+use crate::common;
 use common::*;
 use mesh::{MeshSpec, Model, Region};
 

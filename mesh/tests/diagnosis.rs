@@ -1,7 +1,7 @@
 //! A gmsh failure is reported in the specimen's terms: which entity, where
 //! on the bar, what is wrong with it and what to change (issue 15).
 
-mod common;
+use crate::common;
 use common::*;
 use geom::diagnose::EntityRef;
 use mesh::{mesh_built_specimen, MeshError, MeshSpec};

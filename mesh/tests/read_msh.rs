@@ -1,6 +1,6 @@
 //! Reading `.msh` 4.1: node tags, physical names, ASCII and binary (SPEC §4, §9).
 
-mod common;
+use crate::common;
 use common::*;
 use mesh::read_msh;
 

@@ -1,7 +1,7 @@
 //! The spiral-ribbed bar of the geometry stage, meshed at the paper's
 //! interface size: topology and interface area (SPEC §3, §4, issue 3).
 
-mod common;
+use crate::common;
 use common::*;
 use mesh::{mesh_specimen, MeshSpec, Model};
 

@@ -2,7 +2,7 @@
 //! quarter smooth-80 meshed by gmsh and built into a model whose mirror-plane
 //! node sets the solver holds.
 
-mod common;
+use crate::common;
 use common::*;
 use mesh::{build_model, mesh_specimen, read_msh, MeshError, MeshSpec, Model, Region, Symmetry};
 use std::collections::BTreeSet;

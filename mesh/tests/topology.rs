@@ -1,6 +1,6 @@
 //! Topology of the model built from real gmsh meshes (SPEC §4, §9).
 
-mod common;
+use crate::common;
 use common::*;
 use mesh::{build_model, read_msh, InterfaceZone, Model, Region};
 use std::f64::consts::PI;

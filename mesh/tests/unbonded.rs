@@ -2,7 +2,7 @@
 //! the bonded zone and the bearing face the mesh coarsens along the bar,
 //! while the bonded zone, and so its interface, keeps h_interface.
 
-mod common;
+use crate::common;
 use common::*;
 use mesh::{MeshSpec, Model, Region};
 

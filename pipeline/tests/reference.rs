@@ -37,7 +37,7 @@ fn reference_pages_are_current() {
     assert!(
         stale.is_empty(),
         "docs/src/reference is not what the code generates: {}; rewrite it with \
-         `RIBBAR_WRITE_REFERENCE=1 cargo test -p pipeline --test reference` and commit it",
+         `RIBBAR_WRITE_REFERENCE=1 cargo test -p pipeline --test suite reference::` and commit it",
         stale.join(", ")
     );
 }

@@ -2798,33 +2798,41 @@ fn curve_tolerance_resolves_the_adhesion_peak() {
     resume_at(5, &m, &laws, &loading(4e-5, 3e-3), &settings);
 }
 
-/// A run resumed from the checkpoint of any committed step, or of the
-/// state a stall went back to, takes the uninterrupted run's decisions and
-/// gives its curve and energy record bit for bit (SPEC §6 resume;
-/// docs/architecture.md, "The stepping policy": everything the policy
-/// remembers is in the checkpoint). The defaults on `snap_back_case` pass
-/// through cut-backs, a stall that goes back to before them (the rewind
-/// point), a second stall that starts again with the interface points
-/// held from step 1, and the hand-over to dissipation control that follows
-/// the snap-back to the end.
-#[test]
-fn a_run_resumed_after_any_step_equals_the_uninterrupted_one() {
+/// Resumes the defaults' run on `snap_back_case` from the checkpoints
+/// `pick` selects and returns the events (1-based) whose resumed run gave
+/// another curve, energy record or ending. `pick` sees each checkpoint's
+/// place: its index, whether it is a going back, its control mode and the
+/// cut-backs taken before it. The path passes through cut-backs, a stall
+/// that goes back to before them (the rewind point), a second stall that
+/// starts again with the interface points held from step 1, and the
+/// hand-over to dissipation control that follows the snap-back to the end.
+fn resumes_that_differ(pick: impl Fn(&[CheckpointPlace], usize) -> bool) -> Vec<usize> {
     struct Every {
         checkpoints: Vec<solve::nonlinear::Checkpoint>,
-        modes: Vec<solve::nonlinear::ControlMode>,
+        places: Vec<CheckpointPlace>,
         cutbacks: usize,
         rewinds: usize,
     }
     impl Observer for Every {
         fn step_converged(&mut self, r: &StepReport, v: &CommittedView<'_>) {
             self.checkpoints.push((v.checkpoint)());
-            self.modes.push(r.mode);
+            self.places.push(CheckpointPlace {
+                rewind: false,
+                mode: r.mode,
+                cutbacks_before: self.cutbacks,
+            });
         }
         fn cutback(&mut self, _: &solve::nonlinear::Cutback) {
             self.cutbacks += 1;
         }
         fn rewound(&mut self, _: usize, v: &CommittedView<'_>) {
             self.checkpoints.push((v.checkpoint)());
+            let mode = self.places.last().map(|p| p.mode).unwrap_or_default();
+            self.places.push(CheckpointPlace {
+                rewind: true,
+                mode,
+                cutbacks_before: self.cutbacks,
+            });
             self.rewinds += 1;
         }
     }
@@ -2832,7 +2840,7 @@ fn a_run_resumed_after_any_step_equals_the_uninterrupted_one() {
     let settings = SolverSettings::default();
     let mut every = Every {
         checkpoints: Vec::new(),
-        modes: Vec::new(),
+        places: Vec::new(),
         cutbacks: 0,
         rewinds: 0,
     };
@@ -2845,12 +2853,22 @@ fn a_run_resumed_after_any_step_equals_the_uninterrupted_one() {
         every.cutbacks,
         every.rewinds
     );
-    assert!(every.modes.contains(&solve::nonlinear::ControlMode::Energy));
-    let dir = std::env::temp_dir().join(format!("ribbar-resume-every-{}", std::process::id()));
+    assert!(every
+        .places
+        .iter()
+        .any(|p| p.mode == solve::nonlinear::ControlMode::Energy));
+    let dir = std::env::temp_dir().join(format!(
+        "ribbar-resume-every-{}-{:?}",
+        std::process::id(),
+        std::thread::current().id()
+    ));
     std::fs::create_dir_all(&dir).unwrap();
     let file = dir.join("state.bin");
     let mut differ = Vec::new();
     for (k, cp) in every.checkpoints.into_iter().enumerate() {
+        if !pick(&every.places, k) {
+            continue;
+        }
         // Through the file, as a stage resumes.
         cp.save(&file, "resume-test").unwrap();
         let cp = solve::nonlinear::Checkpoint::load(&file, "resume-test").unwrap();
@@ -2863,6 +2881,47 @@ fn a_run_resumed_after_any_step_equals_the_uninterrupted_one() {
         }
     }
     std::fs::remove_dir_all(&dir).ok();
+    differ
+}
+
+/// Where on the path a checkpoint was taken.
+#[derive(Debug, Clone, Copy)]
+struct CheckpointPlace {
+    rewind: bool,
+    mode: solve::nonlinear::ControlMode,
+    cutbacks_before: usize,
+}
+
+/// A run resumed at each turning point of its path takes the
+/// uninterrupted run's decisions and gives its curve and energy record bit
+/// for bit (SPEC §6 resume; docs/architecture.md, "The stepping policy":
+/// everything the policy remembers is in the checkpoint). The turning
+/// points: each going back and the steps either side of it, the first step
+/// of each stretch of cut-backs, each change of control mode, and the first
+/// and last steps. The on-demand suite resumes after every step.
+#[test]
+fn a_run_resumed_at_each_turning_point_equals_the_uninterrupted_one() {
+    let differ = resumes_that_differ(|places, k| {
+        let cut = |i: usize| i > 0 && places[i].cutbacks_before > places[i - 1].cutbacks_before;
+        k == 0
+            || k + 1 == places.len()
+            || places[k].rewind
+            || (k > 0 && places[k - 1].rewind)
+            || places.get(k + 1).is_some_and(|p| p.rewind)
+            || (k > 0 && places[k].mode != places[k - 1].mode)
+            || (cut(k) && !cut(k - 1))
+    });
+    assert!(
+        differ.is_empty(),
+        "resumed after the events {differ:?}: another curve"
+    );
+}
+
+/// As above, resumed after every committed step and every going back.
+#[test]
+#[ignore = "long (about 2 min): the on-demand suite, scripts/test-long.sh"]
+fn a_run_resumed_after_any_step_equals_the_uninterrupted_one() {
+    let differ = resumes_that_differ(|_, _| true);
     assert!(
         differ.is_empty(),
         "resumed after the events {differ:?}: another curve"

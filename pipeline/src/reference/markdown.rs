@@ -3,7 +3,7 @@
 /// The line every generated page starts with.
 pub(super) const GENERATED: &str =
     "<!-- Generated from the code by `pipeline::reference`; do not edit. \
-Rewrite with: RIBBAR_WRITE_REFERENCE=1 cargo test -p pipeline --test reference -->";
+Rewrite with: RIBBAR_WRITE_REFERENCE=1 cargo test -p pipeline --test suite reference:: -->";
 
 /// Text for a Markdown table cell: one line, pipes escaped.
 pub(super) fn cell(text: &str) -> String {
