@@ -92,8 +92,9 @@ phase "python package"
 # The user guide: the book builds (its links and pages are checked by
 # tests/docs.rs above), the shipped scenes and studies validate against
 # `ribbar schema`, every console and Python block of its pages runs as
-# written and the notebooks run from top to bottom, with the package just
-# installed (its `ribbar` command and interpreter first on PATH).
+# written (docs/tests/pages.py says which are shown only) and the notebooks
+# run from top to bottom, with the package just installed (its `ribbar`
+# command and interpreter first on PATH).
 wait_for "$mdbook_pid" mdbook
 .tools/mdbook-venv/bin/mdbook build docs >/dev/null
 .tools/python-test-venv/bin/pip install -q --disable-pip-version-check \

@@ -14,7 +14,10 @@ expected output, stdout and stderr together:
   exit status it must end with.
 
 A ```python block runs with `python3`, preceded by the page's earlier Python
-blocks, and must exit 0.
+blocks, and must exit 0. A ```python,norun block is shown and not run: it
+reads the results of commands the page shows in plain blocks because they
+take minutes (a study's runs); python/tests runs the same calls on a small
+study.
 
 A page that needs a program the test machine may lack names it in a
 comment `<!-- requires: pvpython -->`.

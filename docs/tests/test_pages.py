@@ -45,9 +45,10 @@ def test_the_runner_sees_commands_and_outputs(tmp_path: Path) -> None:
     page = tmp_path / "p.md"
     page.write_text(
         "text\n```console\n$ echo a \\\n  b\na b\n$ false\n? 1\n```\n```sh\n$ not run\n```\n"
+        "```python,norun\nimport not_run\n```\n```python\nx = 1\n```\n"
     )
     found = pages.commands(page)
-    assert [c.text for c in found] == ["echo a \\\n  b", "false"]
+    assert [c.text for c in found] == ["echo a \\\n  b", "false", "x = 1\n"]
     assert found[0].expected == ["a b"] and found[1].status == 1
     assert pages.mismatch(["x [..] z", "..."], ["x y z", "more", "lines"]) is None
     assert pages.mismatch(["x"], ["x", "more"]) is not None

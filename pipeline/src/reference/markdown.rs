@@ -5,10 +5,35 @@ pub(super) const GENERATED: &str =
     "<!-- Generated from the code by `pipeline::reference`; do not edit. \
 Rewrite with: RIBBAR_WRITE_REFERENCE=1 cargo test -p pipeline --test suite reference:: -->";
 
-/// Text for a Markdown table cell: one line, pipes escaped.
+/// Text for a Markdown table cell: one line, pipes escaped, and a `<`
+/// outside code spans written as `&lt;`, so that `WORK/<study>` is not
+/// read as an HTML tag.
 pub(super) fn cell(text: &str) -> String {
-    text.split_whitespace()
-        .collect::<Vec<_>>()
-        .join(" ")
-        .replace('|', "\\|")
+    let one_line = text.split_whitespace().collect::<Vec<_>>().join(" ");
+    let mut out = String::with_capacity(one_line.len());
+    let mut in_code = false;
+    for c in one_line.chars() {
+        match c {
+            '`' => {
+                in_code = !in_code;
+                out.push(c);
+            }
+            '|' => out.push_str("\\|"),
+            '<' if !in_code => out.push_str("&lt;"),
+            _ => out.push(c),
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    /// Cells are one line; pipes are escaped everywhere, `<` outside code.
+    #[test]
+    fn cells_are_one_line_without_html() {
+        assert_eq!(
+            super::cell("a  |\n b `WORK/<s>` WORK/<s>"),
+            "a \\| b `WORK/<s>` WORK/&lt;s>"
+        );
+    }
 }
