@@ -6,20 +6,24 @@ pub(super) const GENERATED: &str =
 Rewrite with: RIBBAR_WRITE_REFERENCE=1 cargo test -p pipeline --test suite reference:: -->";
 
 /// Text for a Markdown table cell: one line, pipes escaped, and a `<`
-/// outside code spans written as `&lt;`, so that `WORK/<study>` is not
-/// read as an HTML tag.
+/// that would open an HTML tag outside code spans written as `&lt;`, so
+/// that `WORK/<study>` is not read as one (`0 < a` stays as it is).
 pub(super) fn cell(text: &str) -> String {
     let one_line = text.split_whitespace().collect::<Vec<_>>().join(" ");
     let mut out = String::with_capacity(one_line.len());
     let mut in_code = false;
-    for c in one_line.chars() {
+    let mut chars = one_line.chars().peekable();
+    while let Some(c) = chars.next() {
+        let opens_tag = chars
+            .peek()
+            .is_some_and(|n| n.is_ascii_alphabetic() || matches!(n, '/' | '!'));
         match c {
             '`' => {
                 in_code = !in_code;
                 out.push(c);
             }
             '|' => out.push_str("\\|"),
-            '<' if !in_code => out.push_str("&lt;"),
+            '<' if !in_code && opens_tag => out.push_str("&lt;"),
             _ => out.push(c),
         }
     }
@@ -32,8 +36,8 @@ mod tests {
     #[test]
     fn cells_are_one_line_without_html() {
         assert_eq!(
-            super::cell("a  |\n b `WORK/<s>` WORK/<s>"),
-            "a \\| b `WORK/<s>` WORK/&lt;s>"
+            super::cell("a  |\n b `WORK/<s>` WORK/<s> 0 < a"),
+            "a \\| b `WORK/<s>` WORK/&lt;s> 0 < a"
         );
     }
 }
