@@ -1,15 +1,8 @@
 //! `ribbar bench linear` end to end on a coarse mesh, with real gmsh and,
 //! when installed, real CalculiX.
 
-use std::path::{Path, PathBuf};
+use crate::common::repo;
 use std::process::{Command, Stdio};
-
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .parent()
-        .unwrap()
-        .to_path_buf()
-}
 
 fn ccx_installed() -> bool {
     std::env::var_os("PATH")
@@ -43,11 +36,7 @@ fn bench_linear_table_and_agreement_with_calculix() {
         .stdin(Stdio::null())
         .output()
         .expect("ribbar runs");
-    let log = format!(
-        "{}{}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    );
+    let log = crate::common::text(&o);
     assert!(o.status.success(), "bench failed:\n{log}");
     let table = std::fs::read_to_string(out.join("linear.md")).expect("linear.md written");
     let rows: Vec<Vec<&str>> = table

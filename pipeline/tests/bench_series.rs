@@ -1,12 +1,8 @@
 //! `ribbar bench mesh-series --quick` and `ribbar bench solver-settings
 //! --quick` end to end (real gmsh, tiny smooth scene).
 
-use std::path::PathBuf;
+use crate::common::repo;
 use std::process::Command;
-
-fn repo() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..")
-}
 
 fn bench(kind: &str, work: &std::path::Path, sets: &[&str]) -> String {
     let out = work.join("out");

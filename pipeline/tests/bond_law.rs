@@ -2,15 +2,9 @@
 //! bond_law.json, summary.json's design code, the MC2010 curves on the
 //! bond–slip plot, and the design-code options that rerun post alone.
 
-use std::path::{Path, PathBuf};
+use crate::common::repo;
+use std::path::Path;
 use std::process::{Command, Stdio};
-
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .parent()
-        .unwrap()
-        .to_path_buf()
-}
 
 fn run(work: &Path, sets: &[&str]) -> String {
     let mut cmd = Command::new(env!("CARGO_BIN_EXE_ribbar"));
@@ -31,11 +25,7 @@ fn run(work: &Path, sets: &[&str]) -> String {
         .stdin(Stdio::null())
         .output()
         .unwrap();
-    let text = format!(
-        "{}{}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    );
+    let text = crate::common::text(&o);
     assert!(o.status.success(), "{text}");
     text
 }

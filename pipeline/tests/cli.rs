@@ -1,23 +1,15 @@
 //! End-to-end tests of the `ribbar` binary with real gmsh and real files:
 //! every stage, the store's make-style behaviour, bad input, interruption.
 
+use crate::common::{repo, text};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
 const TINY: &str = "tests/data/tiny-smooth.yaml";
 
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .parent()
-        .unwrap()
-        .to_path_buf()
-}
-
 fn work_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("ribbar-cli-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    dir
+    crate::common::scratch("cli", name)
 }
 
 fn ribbar(args: &[&str]) -> Output {
@@ -27,14 +19,6 @@ fn ribbar(args: &[&str]) -> Output {
         .stdin(Stdio::null())
         .output()
         .expect("ribbar runs")
-}
-
-fn text(o: &Output) -> String {
-    format!(
-        "{}{}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    )
 }
 
 fn ok(args: &[&str]) -> String {

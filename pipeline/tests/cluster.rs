@@ -6,21 +6,14 @@
 //! store's lock lets one of two processes compute a shared stage.
 //! scripts/test-slurm.sh runs the workflow under a real Slurm.
 
+use crate::common::{repo, text};
 use std::os::unix::process::ExitStatusExt;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .parent()
-        .unwrap()
-        .to_path_buf()
-}
-
 fn work_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("ribbar-cluster-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
+    let dir = crate::common::scratch("cluster", name);
     std::fs::create_dir_all(&dir).unwrap();
     dir
 }
@@ -28,11 +21,7 @@ fn work_dir(name: &str) -> PathBuf {
 /// Runs `cmd`; its status and its stdout and stderr as one text.
 fn output(cmd: &mut Command) -> (Output, String) {
     let o: Output = cmd.stdin(Stdio::null()).output().expect("command runs");
-    let t = format!(
-        "{}{}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    );
+    let t = text(&o);
     (o, t)
 }
 
@@ -509,11 +498,7 @@ fn two_processes_compute_a_shared_stage_once() {
         .into_iter()
         .map(|c| {
             let o = c.wait_with_output().unwrap();
-            let t = format!(
-                "{}{}",
-                String::from_utf8_lossy(&o.stdout),
-                String::from_utf8_lossy(&o.stderr)
-            );
+            let t = text(&o);
             assert!(o.status.success(), "{t}");
             t
         })

@@ -6,6 +6,7 @@
 //! a clear error naming the file or key with a non-zero exit, and no file
 //! of the user's touched.
 
+use crate::common::{repo, text};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
@@ -16,17 +17,8 @@ const TINY: &str = "tests/data/tiny-smooth.yaml";
 const SHORT: [&str; 2] = ["--set", "loading.u_final=0.02 mm"];
 const STAGES: [&str; 4] = ["geometry", "mesh", "solve", "post"];
 
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .parent()
-        .unwrap()
-        .to_path_buf()
-}
-
 fn work_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("ribbar-faults-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    dir
+    crate::common::scratch("faults", name)
 }
 
 fn ribbar_in(dir: &Path, args: &[&str], env: &[(&str, &Path)]) -> Output {
@@ -40,14 +32,6 @@ fn ribbar_in(dir: &Path, args: &[&str], env: &[(&str, &Path)]) -> Output {
 
 fn ribbar(args: &[&str]) -> Output {
     ribbar_in(&repo(), args, &[])
-}
-
-fn text(o: &Output) -> String {
-    format!(
-        "{}{}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    )
 }
 
 fn ok(args: &[&str]) -> String {

@@ -2,13 +2,10 @@
 //! parameter sets on the tiny smooth scene, each run by `ribbar study` in a
 //! child process, then checked by `bench_series::stress_report`.
 
+use crate::common::repo;
 use pipeline::bench_series::stress_report;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Output};
-
-fn repo() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..")
-}
 
 /// `ribbar ARGS` from the repository root.
 fn ribbar(args: &[&str]) -> Output {

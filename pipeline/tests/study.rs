@@ -2,20 +2,12 @@
 //! and plots are written, convergence studies report GCI (the Snakemake
 //! export under a real `snakemake`: tests/cluster.rs).
 
+use crate::common::{repo, text};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .parent()
-        .unwrap()
-        .to_path_buf()
-}
-
 fn work_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("ribbar-study-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    dir
+    crate::common::scratch("study", name)
 }
 
 /// Runs `cmd` in the repository; its status and its stdout and stderr as one text.
@@ -25,11 +17,7 @@ fn output(cmd: &mut Command) -> (Output, String) {
         .stdin(Stdio::null())
         .output()
         .expect("command runs");
-    let t = format!(
-        "{}{}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    );
+    let t = text(&o);
     (o, t)
 }
 

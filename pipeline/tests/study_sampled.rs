@@ -2,15 +2,9 @@
 //! tiny ribbed scene, its cases' bond laws, the indices, their bar plot and
 //! the trends, from the `ribbar` binary.
 
-use std::path::{Path, PathBuf};
+use crate::common::repo;
+use std::path::Path;
 use std::process::{Command, Stdio};
-
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .parent()
-        .unwrap()
-        .to_path_buf()
-}
 
 fn read(path: &Path) -> String {
     std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))

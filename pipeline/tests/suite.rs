@@ -1,6 +1,8 @@
 //! The pipeline's integration tests, a module per file (each says what it
 //! covers). Real gmsh, real files, the `ribbar` binary.
 
+mod common;
+
 mod bench_linear;
 mod bench_series;
 mod bond_law;
