@@ -5,9 +5,13 @@
 # directory, two at a time (one per core), then `cmp`s every case's
 # curve.csv. Exit 0 only when every curve is identical.
 # Usage: scripts/compare-curves.sh OLD_RIBBAR OLD_CHECKOUT OUT [WHAT...]
-#   WHAT: `run SPEC` or `study STUDY` items, each as one word with a colon
-#   (run:specs/r1-coarse.yaml, study:specs/studies/stress-sweep.yaml); the
-#   default is the test scenes and studies of tests/data.
+#   WHAT: `run SPEC`, `study STUDY` or `case STUDY N` items, each as one
+#   word with colons (run:specs/r1-coarse.yaml,
+#   study:specs/studies/stress-sweep.yaml, case:specs/studies/stress-holdout-7.yaml:3);
+#   the default is the test scenes and studies of tests/data. A case item
+#   runs case N of a study alone (a study whose parameters are all lists
+#   of one length, or a single list), so that a study too long for one
+#   sitting can be compared a few cases at a time.
 set -u
 cd "$(dirname "$0")/.."
 OLD="$1"; OLD_SRC="$2"; OUT="$3"; shift 3
@@ -17,17 +21,45 @@ what=("$@")
 [ ${#what[@]} -gt 0 ] || what=(run:tests/data/tiny-smooth.yaml run:tests/data/tiny-ribbed.yaml
   study:tests/data/tiny-friction.yaml study:tests/data/stress-mini.yaml)
 mkdir -p "$OUT"
+# Case N of STUDY in CHECKOUT as a study of its own, written beside it (so
+# that its `base` path holds); prints the new file's path.
+slice() { # CHECKOUT STUDY N
+  python3 - "$1/$2" "$3" <<'PY'
+import os, sys, yaml
+path, n = sys.argv[1], int(sys.argv[2])
+study = yaml.safe_load(open(path))
+lists = [v for v in study["parameters"].values() if isinstance(v, list)]
+if len(lists) > 1 and study.get("combine", "product") != "zip":
+    sys.exit(f"{path}: case N needs `combine: zip` or a single parameter list")
+if not lists or n >= len(lists[0]):
+    sys.exit(f"{path}: no case {n}")
+study["parameters"] = {k: ([v[n]] if isinstance(v, list) else v)
+                       for k, v in study["parameters"].items()}
+study["name"] = f"{study['name']}-case-{n}"
+out = os.path.join(os.path.dirname(path), f".{study['name']}.yaml")
+yaml.safe_dump(study, open(out, "w"), sort_keys=False, allow_unicode=True)
+print(out)
+PY
+}
 one() { # BIN SRC WORK COMMAND FILE
   ( cd "$2" && "$1" "$4" "$5" --work "$3" -q ${6:+-j 1} ) > "$3.log" 2>&1
   echo "$3: exit $?"
 }
 for item in "${what[@]}"; do
   command=${item%%:*}; file=${item#*:}
-  name=$(basename "$file" .yaml)
+  old_file=$file; new_file=$file
+  if [ "$command" = case ]; then
+    n=${file##*:}; file=${file%:*}
+    old_file=$(slice "$OLD_SRC" "$file" "$n") || exit 1
+    new_file=$(slice "$PWD" "$file" "$n") || exit 1
+    command=study
+  fi
+  name=$(basename "$old_file" .yaml); name=${name#.}
   jobs=""; [ "$command" = study ] && jobs=1
-  one "$OLD" "$OLD_SRC" "$OUT/old-$name" "$command" "$file" $jobs &
-  one "$NEW" "$PWD" "$OUT/new-$name" "$command" "$file" $jobs &
+  one "$OLD" "$OLD_SRC" "$OUT/old-$name" "$command" "$old_file" $jobs &
+  one "$NEW" "$PWD" "$OUT/new-$name" "$command" "$new_file" $jobs &
   wait
+  [ "$old_file" = "$file" ] || rm -f "$old_file" "$new_file"
 done
 same=0; differ=0; missing=0
 for old in "$OUT"/old-*; do
