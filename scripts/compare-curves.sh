@@ -29,9 +29,11 @@ import os, sys, yaml
 path, n = sys.argv[1], int(sys.argv[2])
 study = yaml.safe_load(open(path))
 lists = [v for v in study["parameters"].values() if isinstance(v, list)]
+if study.get("kind", "sweep") != "sweep" or not lists:
+    sys.exit(f"{path}: case N needs a sweep with parameter lists")
 if len(lists) > 1 and study.get("combine", "product") != "zip":
     sys.exit(f"{path}: case N needs `combine: zip` or a single parameter list")
-if not lists or n >= len(lists[0]):
+if n >= len(lists[0]):
     sys.exit(f"{path}: no case {n}")
 study["parameters"] = {k: ([v[n]] if isinstance(v, list) else v)
                        for k, v in study["parameters"].items()}
@@ -51,7 +53,7 @@ for item in "${what[@]}"; do
   if [ "$command" = case ]; then
     n=${file##*:}; file=${file%:*}
     old_file=$(slice "$OLD_SRC" "$file" "$n") || exit 1
-    new_file=$(slice "$PWD" "$file" "$n") || exit 1
+    new_file=$(slice "$PWD" "$file" "$n") || { rm -f "$old_file"; exit 1; }
     command=study
   fi
   name=$(basename "$old_file" .yaml); name=${name#.}
