@@ -3,7 +3,8 @@
 # and studies with an old build (from its own checkout, whose specs it
 # reads) and with this one (this checkout's specs), each from an empty work
 # directory, two at a time (one per core), then `cmp`s every case's
-# curve.csv. Exit 0 only when every curve is identical.
+# curve.csv and prints each case's steps and solve time by both builds.
+# Exit 0 only when every curve is identical.
 # Usage: scripts/compare-curves.sh OLD_RIBBAR OLD_CHECKOUT OUT [WHAT...]
 #   WHAT: `run SPEC`, `study STUDY` or `case STUDY N` items, each as one
 #   word with colons (run:specs/r1-coarse.yaml,
@@ -77,5 +78,23 @@ for old in "$OUT"/old-*; do
     fi
   done < <(cd "$old" && find . -path ./.store -prune -o -name curve.csv -print | sort)
 done
+# Each case's solve time by both builds, from its solve.json (`total` of
+# `wall_time_s`): the two ran side by side, so their ratio is fair where
+# their absolute times are not.
+python3 - "$OUT" <<'PY'
+import glob, json, os, sys
+out = sys.argv[1]
+for old in sorted(glob.glob(os.path.join(out, "old-*", "**", "solve.json"), recursive=True)):
+    if "/.store/" in old:
+        continue
+    rel = os.path.relpath(old, out)
+    new = os.path.join(out, "new-" + rel[len("old-"):])
+    if not os.path.isfile(new):
+        continue
+    o, n = (json.load(open(f))["summary"] for f in (old, new))
+    to, tn = o["wall_time_s"]["total"], n["wall_time_s"]["total"]
+    print(f"time: {os.path.dirname(rel)[len('old-'):]}: {o['steps']} and {n['steps']} steps, "
+          f"{to:.1f} and {tn:.1f} s, ratio {tn / to:.2f}")
+PY
 echo "curves identical: $same, different: $differ, missing: $missing"
 [ "$differ" -eq 0 ] && [ "$missing" -eq 0 ]
