@@ -94,7 +94,7 @@ for old in sorted(glob.glob(os.path.join(out, "old-*", "**", "solve.json"), recu
     o, n = (json.load(open(f))["summary"] for f in (old, new))
     to, tn = o["wall_time_s"]["total"], n["wall_time_s"]["total"]
     print(f"time: {os.path.dirname(rel)[len('old-'):]}: {o['steps']} and {n['steps']} steps, "
-          f"{to:.1f} and {tn:.1f} s, ratio {tn / to:.2f}")
+          f"{to:.1f} and {tn:.1f} s, ratio " + (f"{tn / to:.2f}" if to > 0 else "-"))
 PY
 echo "curves identical: $same, different: $differ, missing: $missing"
 [ "$differ" -eq 0 ] && [ "$missing" -eq 0 ]
